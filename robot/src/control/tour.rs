@@ -1,0 +1,411 @@
+//! A scripted tour: send each step's command, follow motions to their end, and pair laser scans
+//! with the odometry pose at the scan's timestamp.
+//!
+//! The tour talks only to the hardware contract, so the same code drives the twin and the real
+//! robot. It never reads a clock: time comes from the stamps of the status reports and scans, and
+//! passes when the tour blocks on the devices (a wait, a scan read with a timeout, a status round
+//! trip).
+//!
+//! Two pacings, because of how the base firmware counts (thesis App. A):
+//!
+//! - [`Pacing::StopAndGo`] (the default, and how the thesis drove its robot): after a motion
+//!   command the tour waits with the firmware's `w` until both motors are off, reads the counters
+//!   once at rest, and keeps the first scan measured after the robot has settled. The counters are
+//!   exact this way (less the wheels' coast after the brake, which the firmware never counts).
+//! - [`Pacing::Polling`]: the tour polls `l` while the robot moves and keeps every scan, with the
+//!   odometry interpolated to the scan's stamp from a FIFO of status reports. Each status reply
+//!   keeps the firmware's main loop busy while it is sent (18 ms at 9600 bps); above about 13
+//!   counts per tick the 8-bit encoder accumulators saturate meanwhile and counts are lost, so the
+//!   robot overshoots and the odometry falls short. Use it with a slow ramp (`k5 12 50`).
+
+use crate::control::script::{Step, StepError};
+use crate::drive_geometry::DriveGeometry;
+use crate::geometry::Pose2;
+use crate::hardware::{DriveBase, DriveStatus, DriveWait, HardwareError, Laser, LaserScan};
+use crate::odometry::{Odometer, OdometryHistory};
+use crate::protocol::base::DriveLine;
+use crate::time::Stamp;
+use core::time::Duration;
+use std::collections::VecDeque;
+
+/// How the tour waits for motions and which scans it keeps.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub enum Pacing {
+    /// Wait for each motion with `w`, read the counters at rest, keep one scan measured at least
+    /// `settle` after the motors stopped.
+    StopAndGo {
+        /// Time for the wheels to stop coasting after the brake.
+        settle: Duration,
+    },
+    /// Poll the counters while moving, waiting at most `period` for a scan between polls; keep
+    /// every scan.
+    Polling {
+        /// Longest wait for a scan before the base is polled again.
+        period: Duration,
+    },
+}
+
+/// How a tour paces itself.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct TourConfig {
+    /// How motions are awaited and which scans are kept.
+    pub pacing: Pacing,
+    /// Longest wait for a scan before the base is polled again while pausing.
+    pub poll: Duration,
+    /// A motion that has not ended after this long (robot time) fails the tour; so does a laser
+    /// that sends nothing for this long.
+    pub motion_timeout: Duration,
+}
+
+impl Default for TourConfig {
+    fn default() -> Self {
+        TourConfig {
+            pacing: Pacing::StopAndGo {
+                settle: Duration::from_millis(100),
+            },
+            poll: Duration::from_millis(50),
+            motion_timeout: Duration::from_secs(120),
+        }
+    }
+}
+
+/// What a tour reports to its observer as it goes.
+#[derive(Debug)]
+pub enum TourEvent<'a> {
+    /// Step `index` (0-based) of `total` is about to be carried out.
+    StepStarted {
+        /// Index of the step.
+        index: usize,
+        /// Number of steps.
+        total: usize,
+        /// The step.
+        step: &'a Step,
+    },
+    /// A scan, with the odometry pose interpolated to its stamp.
+    Scan {
+        /// The scan.
+        scan: &'a LaserScan,
+        /// Odometry at `scan.stamp`, in the tour's starting frame.
+        odometry: Pose2,
+    },
+}
+
+/// Why a tour stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum TourError<E: HardwareError> {
+    /// The hardware failed.
+    #[error("step {index} `{step}`: {source}")]
+    Hardware {
+        /// Index of the step (0-based).
+        index: usize,
+        /// The step, as written.
+        step: String,
+        /// The backend's error.
+        #[source]
+        source: E,
+    },
+    /// The step cannot be carried out on this robot.
+    #[error("step {index} `{step}`: {source}")]
+    Step {
+        /// Index of the step (0-based).
+        index: usize,
+        /// The step, as written.
+        step: String,
+        /// Why.
+        #[source]
+        source: StepError,
+    },
+    /// A motion did not end in time, or the laser sent nothing.
+    #[error("step {index} `{step}`: the motion had not ended, or no scan came, after {timeout:?}")]
+    Stuck {
+        /// Index of the step (0-based).
+        index: usize,
+        /// The step, as written.
+        step: String,
+        /// The limit that was exceeded.
+        timeout: Duration,
+    },
+}
+
+/// What a finished tour did.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct TourReport {
+    /// Steps carried out.
+    pub steps: usize,
+    /// Scans handed to the observer.
+    pub scans: usize,
+    /// The odometry pose at the end.
+    pub final_odometry: Pose2,
+    /// The stamp of the last status report.
+    pub end: Stamp,
+}
+
+/// Runs `steps` on `robot`, starting the odometry at `start`, and reports to `observer`.
+pub fn run_tour<R, F>(
+    robot: &mut R,
+    geometry: DriveGeometry,
+    start: Pose2,
+    steps: &[Step],
+    config: &TourConfig,
+    mut observer: F,
+) -> Result<TourReport, TourError<R::Error>>
+where
+    R: DriveBase + Laser,
+    F: FnMut(TourEvent<'_>),
+{
+    let mut tour = Tour {
+        geometry,
+        config: *config,
+        odometer: Odometer::new(geometry, start),
+        history: OdometryHistory::new(4096),
+        pending: VecDeque::new(),
+        last_status: None,
+        scans: 0,
+    };
+    for (index, step) in steps.iter().enumerate() {
+        observer(TourEvent::StepStarted {
+            index,
+            total: steps.len(),
+            step,
+        });
+        tour.carry_out(robot, step, &mut observer)
+            .map_err(|e| e.at(index, step))?;
+    }
+    tour.finish(robot, &mut observer)
+        .map_err(|e| e.at(steps.len(), &Step::Pause { seconds: 0.0 }))?;
+    Ok(TourReport {
+        steps: steps.len(),
+        scans: tour.scans,
+        final_odometry: tour.odometer.pose(),
+        end: tour.last_status.map_or(Stamp::ZERO, |s| s.stamp),
+    })
+}
+
+/// A failure inside a step, before the step's index is known.
+enum Failure<E> {
+    Hardware(E),
+    Step(StepError),
+    Stuck(Duration),
+}
+
+impl<E: HardwareError> Failure<E> {
+    fn at(self, index: usize, step: &Step) -> TourError<E> {
+        let step = step.to_string();
+        match self {
+            Failure::Hardware(source) => TourError::Hardware {
+                index,
+                step,
+                source,
+            },
+            Failure::Step(source) => TourError::Step {
+                index,
+                step,
+                source,
+            },
+            Failure::Stuck(timeout) => TourError::Stuck {
+                index,
+                step,
+                timeout,
+            },
+        }
+    }
+}
+
+struct Tour {
+    geometry: DriveGeometry,
+    config: TourConfig,
+    odometer: Odometer,
+    history: OdometryHistory,
+    /// Scans received but not yet bracketed by a status report.
+    pending: VecDeque<LaserScan>,
+    last_status: Option<DriveStatus>,
+    scans: usize,
+}
+
+impl Tour {
+    fn carry_out<R, F>(
+        &mut self,
+        robot: &mut R,
+        step: &Step,
+        observer: &mut F,
+    ) -> Result<(), Failure<R::Error>>
+    where
+        R: DriveBase + Laser,
+        F: FnMut(TourEvent<'_>),
+    {
+        match step.to_line(&self.geometry).map_err(Failure::Step)? {
+            Some(DriveLine::Command(command)) => {
+                let motion = command.resets_counters();
+                if motion {
+                    // The firmware clears its counters on a motion command: read them first.
+                    self.poll_status(robot, observer)?;
+                }
+                robot.drive(command).map_err(Failure::Hardware)?;
+                self.odometer.commanded(&command);
+                if motion {
+                    match self.config.pacing {
+                        Pacing::StopAndGo { settle } => {
+                            self.stop_and_go(robot, settle, observer)?
+                        }
+                        Pacing::Polling { period } => {
+                            self.follow_motion(robot, period, observer)?
+                        }
+                    }
+                }
+            }
+            Some(DriveLine::Wait(wait)) => {
+                robot.wait_drive(wait).map_err(Failure::Hardware)?;
+                self.poll_status(robot, observer)?;
+            }
+            None => {
+                let Step::Pause { seconds } = *step else {
+                    unreachable!("only a pause sends nothing")
+                };
+                let from = self.poll_status(robot, observer)?.stamp;
+                let until = from + Duration::from_secs_f64(seconds);
+                while self.service(robot, self.config.poll, observer)?.stamp < until {}
+            }
+        }
+        Ok(())
+    }
+
+    /// Waits with `w` until the motors are off, reads the counters, then keeps the first scan
+    /// measured once the robot has settled; scans measured before are skipped.
+    fn stop_and_go<R, F>(
+        &mut self,
+        robot: &mut R,
+        settle: Duration,
+        observer: &mut F,
+    ) -> Result<(), Failure<R::Error>>
+    where
+        R: DriveBase + Laser,
+        F: FnMut(TourEvent<'_>),
+    {
+        // `w` waits at most 65535 ticks; a longer motion takes several waits.
+        let wait_ms = self
+            .config
+            .motion_timeout
+            .as_millis()
+            .clamp(1, u128::from(u16::MAX)) as u16;
+        let mut started: Option<Stamp> = None;
+        let stopped = loop {
+            robot
+                .wait_drive(DriveWait::motors(wait_ms))
+                .map_err(Failure::Hardware)?;
+            let status = self.poll_status(robot, observer)?;
+            if status.is_idle() {
+                break status;
+            }
+            let t0 = *started.get_or_insert(status.stamp);
+            if status.stamp.saturating_since(t0) > self.config.motion_timeout {
+                return Err(Failure::Stuck(self.config.motion_timeout));
+            }
+        };
+        let rest_pose = self.odometer.pose();
+        // Scans measured during the motion are of no use without odometry: skip them.
+        self.pending.clear();
+        let scan = robot
+            .read_scan_since(stopped.stamp + settle, self.config.motion_timeout)
+            .map_err(Failure::Hardware)?
+            .ok_or(Failure::Stuck(self.config.motion_timeout))?;
+        self.scans += 1;
+        observer(TourEvent::Scan {
+            scan: &scan,
+            odometry: rest_pose,
+        });
+        Ok(())
+    }
+
+    /// Reads scans and polls the base until both drive motors are off.
+    fn follow_motion<R, F>(
+        &mut self,
+        robot: &mut R,
+        period: Duration,
+        observer: &mut F,
+    ) -> Result<(), Failure<R::Error>>
+    where
+        R: DriveBase + Laser,
+        F: FnMut(TourEvent<'_>),
+    {
+        let mut started: Option<Stamp> = None;
+        loop {
+            let status = self.service(robot, period, observer)?;
+            if status.is_idle() {
+                return Ok(());
+            }
+            let t0 = *started.get_or_insert(status.stamp);
+            if status.stamp.saturating_since(t0) > self.config.motion_timeout {
+                return Err(Failure::Stuck(self.config.motion_timeout));
+            }
+        }
+    }
+
+    /// Waits for a scan (at most `period`), then polls the base.
+    fn service<R, F>(
+        &mut self,
+        robot: &mut R,
+        period: Duration,
+        observer: &mut F,
+    ) -> Result<DriveStatus, Failure<R::Error>>
+    where
+        R: DriveBase + Laser,
+        F: FnMut(TourEvent<'_>),
+    {
+        if let Some(scan) = robot.read_scan(period).map_err(Failure::Hardware)? {
+            self.pending.push_back(scan);
+        }
+        self.poll_status(robot, observer)
+    }
+
+    /// Polls the base, integrates odometry and hands over every scan now bracketed.
+    fn poll_status<R, F>(
+        &mut self,
+        robot: &mut R,
+        observer: &mut F,
+    ) -> Result<DriveStatus, Failure<R::Error>>
+    where
+        R: DriveBase + Laser,
+        F: FnMut(TourEvent<'_>),
+    {
+        let status = robot.drive_status().map_err(Failure::Hardware)?;
+        let pose = self.odometer.observe(&status);
+        self.history.push(status.stamp, pose);
+        self.last_status = Some(status);
+        self.emit_ready(observer, false);
+        Ok(status)
+    }
+
+    /// Hands over the scans whose stamp the odometry history covers (or all, when finishing).
+    fn emit_ready<F: FnMut(TourEvent<'_>)>(&mut self, observer: &mut F, all: bool) {
+        while let Some(scan) = self.pending.front() {
+            let odometry = match self.history.at(scan.stamp) {
+                Some(pose) => pose,
+                None => match self.history.latest() {
+                    // Older than the history (only before the first poll) or, when finishing,
+                    // newer than the last report while the robot stands still.
+                    Some((t, pose)) if scan.stamp < t || all => pose,
+                    _ => break,
+                },
+            };
+            let scan = self.pending.pop_front().expect("front exists");
+            self.scans += 1;
+            observer(TourEvent::Scan {
+                scan: &scan,
+                odometry,
+            });
+        }
+    }
+
+    /// Collects the scan still in flight and hands over everything pending.
+    fn finish<R, F>(&mut self, robot: &mut R, observer: &mut F) -> Result<(), Failure<R::Error>>
+    where
+        R: DriveBase + Laser,
+        F: FnMut(TourEvent<'_>),
+    {
+        if matches!(self.config.pacing, Pacing::Polling { .. }) {
+            self.service(robot, self.config.poll, observer)?;
+        }
+        self.emit_ready(observer, true);
+        Ok(())
+    }
+}

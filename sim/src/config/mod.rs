@@ -1,0 +1,15 @@
+//! Data files — worlds, robots and scenarios, written in TOML — read into validated descriptions.
+//!
+//! A file that cannot be used gives a [`ConfigError`] naming the file, the line, the column and
+//! the field, and saying what was expected.
+
+mod error;
+pub mod robot_file;
+pub mod scenario;
+pub mod values;
+pub mod world;
+
+pub use error::ConfigError;
+pub use robot_file::RobotDescription;
+pub use scenario::{NoiseSettings, Scenario};
+pub use world::{Material, Wall, WorldDescription};

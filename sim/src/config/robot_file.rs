@@ -1,0 +1,277 @@
+//! Robot description files: wheels, gearbox, motors, body, laser mount and batteries.
+//!
+//! Everything the twin needs to know about a robot is data. The two shipped descriptions are
+//! `scenarios/robots/pioneer-3dx.toml` (the project's default, a Pioneer 3-DX class base carrying
+//! the thesis's drive electronics and sensors) and `scenarios/robots/thesis-roca.toml` (the custom
+//! base of the thesis). Each names its sources.
+
+use super::error::{ConfigError, Source};
+use super::values::{Finite, NonNegative, Positive, UnitInterval};
+use robot::{DriveGeometry, Pose2};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// A validated robot description.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RobotDescription {
+    /// Short name.
+    pub name: String,
+    /// What the robot is.
+    pub description: String,
+    /// Where the numbers come from.
+    pub sources: Vec<String>,
+    /// Wheels and gearbox, as the robot's software believes them.
+    pub drive: DriveDescription,
+    /// The drive motors.
+    pub motor: MotorDescription,
+    /// The body that collides with walls.
+    pub body: BodyDescription,
+    /// The laser and its mount.
+    pub laser: LaserDescription,
+    /// The batteries.
+    pub battery: BatteryDescription,
+    /// The file it was read from.
+    pub path: PathBuf,
+}
+
+/// Wheels, gearbox and encoders.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DriveDescription {
+    /// Nominal wheel diameter, metres.
+    pub wheel_diameter_m: Positive,
+    /// Nominal distance between the wheels' contact points, metres.
+    pub track_m: Positive,
+    /// Motor turns per wheel turn.
+    pub gear_ratio: Positive,
+    /// Encoder counts per motor (rotor) turn as the firmware counts them.
+    pub counts_per_rotor_turn: u32,
+    /// Bit rate of the base microcontroller's serial line.
+    pub serial_baud: u32,
+}
+
+/// A brushed DC gear motor, from its datasheet figures at nominal voltage.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MotorDescription {
+    /// Voltage of the datasheet figures, volts.
+    pub nominal_voltage_v: Positive,
+    /// Output-shaft speed without load at nominal voltage, rpm.
+    pub no_load_output_rpm: Positive,
+    /// Current at stall and nominal voltage, amperes.
+    pub stall_current_a: Positive,
+    /// Current without load at nominal voltage, amperes (sets the friction torque).
+    pub no_load_current_a: NonNegative,
+    /// Inertia of the rotor, kg·m².
+    pub rotor_inertia_kg_m2: Positive,
+}
+
+/// The robot's body.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodyDescription {
+    /// Mass with batteries and payload, kg.
+    pub mass_kg: Positive,
+    /// Radius of the round footprint that collides with walls, metres.
+    pub radius_m: Positive,
+    /// Position of the footprint's centre ahead of the wheel axle, metres.
+    #[serde(default = "zero")]
+    pub center_x_m: Finite,
+}
+
+/// The laser rangefinder and where it sits on the base.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LaserDescription {
+    /// Mount position ahead of the wheel axle, metres.
+    pub x_m: Finite,
+    /// Mount position to the left of the axle's centre, metres.
+    #[serde(default = "zero")]
+    pub y_m: Finite,
+    /// Mount heading, degrees counter-clockwise.
+    #[serde(default = "zero")]
+    pub yaw_deg: Finite,
+    /// Number of beams.
+    pub beams: u16,
+    /// Field of view from first to last beam, degrees.
+    pub fov_deg: Positive,
+    /// Maximum range and no-return value, metres.
+    pub range_max_m: Positive,
+    /// Standard deviation of the range noise, metres.
+    pub sigma_m: NonNegative,
+    /// Bit rate of the laser's serial line.
+    pub baud: u32,
+    /// Time the mirror takes for one scan at this resolution, seconds.
+    pub sweep_s: Positive,
+    /// Bytes of one scan telegram on the serial line.
+    pub telegram_bytes: u32,
+}
+
+/// The two battery pairs.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BatteryDescription {
+    /// Capacity of each 12 V battery, ampere-hours.
+    pub capacity_ah: Positive,
+    /// Charge at the start, 0..=1.
+    pub state_of_charge: UnitInterval,
+    /// Internal resistance of each 12 V battery, ohms.
+    pub internal_resistance_ohm: NonNegative,
+    /// Current drawn from the electronics pair (laser, sonar, boards), amperes.
+    pub logic_load_a: NonNegative,
+}
+
+fn zero() -> Finite {
+    Finite(0.0)
+}
+
+impl RobotDescription {
+    /// Reads and validates a robot description.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, ConfigError> {
+        let source = Source::read(path.as_ref())?;
+        Self::from_source(&source)
+    }
+
+    /// Parses and validates robot-description text; `path` only names it in errors.
+    pub fn parse(text: &str, path: impl AsRef<Path>) -> Result<Self, ConfigError> {
+        Self::from_source(&Source {
+            path: path.as_ref().to_path_buf(),
+            text: text.to_string(),
+        })
+    }
+
+    fn from_source(source: &Source) -> Result<Self, ConfigError> {
+        let file: RobotFile = source.parse()?;
+        let invalid =
+            |field: &str, message: String| source.error_in_file(Some(field.into()), message);
+        if file.drive.counts_per_rotor_turn == 0 {
+            return Err(invalid(
+                "drive.counts_per_rotor_turn",
+                "expected at least 1 count per turn".into(),
+            ));
+        }
+        if file.laser.beams < 2 {
+            return Err(invalid(
+                "laser.beams",
+                format!("expected at least 2 beams, found {}", file.laser.beams),
+            ));
+        }
+        if file.laser.fov_deg.get() > 360.0 {
+            return Err(invalid(
+                "laser.fov_deg",
+                format!("expected at most 360, found {}", file.laser.fov_deg.get()),
+            ));
+        }
+        if file.laser.range_max_m.get() > 65.535 {
+            return Err(invalid(
+                "laser.range_max_m",
+                format!(
+                    "millimetre readings fit 16 bits: expected at most 65.535, found {}",
+                    file.laser.range_max_m.get()
+                ),
+            ));
+        }
+        for (field, baud) in [
+            ("drive.serial_baud", file.drive.serial_baud),
+            ("laser.baud", file.laser.baud),
+        ] {
+            if baud == 0 {
+                return Err(invalid(field, "expected a bit rate above 0".into()));
+            }
+        }
+        if file.motor.no_load_current_a.get() >= file.motor.stall_current_a.get() {
+            return Err(invalid(
+                "motor.no_load_current_a",
+                "must be below the stall current".into(),
+            ));
+        }
+        Ok(RobotDescription {
+            name: file.name,
+            description: file.description,
+            sources: file.sources,
+            drive: file.drive,
+            motor: file.motor,
+            body: file.body,
+            laser: file.laser,
+            battery: file.battery,
+            path: source.path.clone(),
+        })
+    }
+
+    /// The nominal geometry the robot's odometry uses.
+    pub fn geometry(&self) -> DriveGeometry {
+        DriveGeometry {
+            wheel_diameter_m: self.drive.wheel_diameter_m.get(),
+            track_m: self.drive.track_m.get(),
+            gear_ratio: self.drive.gear_ratio.get(),
+            counts_per_rotor_turn: self.drive.counts_per_rotor_turn,
+        }
+    }
+
+    /// The laser's pose on the base (axle centre frame).
+    pub fn laser_mount(&self) -> Pose2 {
+        Pose2::new(
+            self.laser.x_m.get(),
+            self.laser.y_m.get(),
+            self.laser.yaw_deg.get().to_radians(),
+        )
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RobotFile {
+    name: String,
+    #[serde(default)]
+    description: String,
+    #[serde(default)]
+    sources: Vec<String>,
+    drive: DriveDescription,
+    motor: MotorDescription,
+    body: BodyDescription,
+    laser: LaserDescription,
+    battery: BatteryDescription,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn shipped(name: &str) -> RobotDescription {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../scenarios/robots")
+            .join(name);
+        RobotDescription::load(&path).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    #[test]
+    fn shipped_descriptions_load() {
+        let p3dx = shipped("pioneer-3dx.toml");
+        assert_eq!(p3dx.laser.beams, 361);
+        assert!((p3dx.geometry().wheel_diameter_m - 0.195).abs() < 1e-12);
+        let roca = shipped("thesis-roca.toml");
+        assert_eq!(roca.drive.counts_per_rotor_turn, 1000);
+        assert_eq!(roca.laser.baud, 9600);
+    }
+
+    #[test]
+    fn a_negative_wheel_is_refused_at_its_line() {
+        let path =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/robots/pioneer-3dx.toml");
+        let text = std::fs::read_to_string(path).unwrap();
+        let bad = text.replace("wheel_diameter_m = 0.195", "wheel_diameter_m = -0.195");
+        let err = RobotDescription::parse(&bad, "p3dx.toml").unwrap_err();
+        let line = text
+            .lines()
+            .position(|l| l.starts_with("wheel_diameter_m"))
+            .unwrap()
+            + 1;
+        assert_eq!(err.line, Some(line), "{err}");
+        assert_eq!(err.field.as_deref(), Some("wheel_diameter_m"), "{err}");
+        assert!(
+            err.message
+                .contains("expected a positive number, found -0.195"),
+            "{err}"
+        );
+    }
+}

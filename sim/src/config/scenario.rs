@@ -1,0 +1,260 @@
+//! Scenario files: a world, a robot, a seed, noise settings and a command script.
+//!
+//! ```toml
+//! name = "lab-tour"
+//! world = "../worlds/lab.toml"          # paths are relative to this file
+//! robot = "robots/pioneer-3dx.toml"
+//! seed = 2007
+//!
+//! [noise]                               # every key optional
+//! slip_sigma_sqrt_m = 0.003             # per-wheel slip: σ of 3 mm after 1 m of travel
+//! wheel_diameter_ratio_error = 0.004    # true D_right / D_left − 1 (Borenstein's E_d − 1)
+//! wheel_scale_error = 0.002             # true mean diameter / nominal − 1
+//! track_error = 0.01                    # true track / nominal − 1
+//! laser_sigma_m = 0.01                  # overrides the robot's laser σ
+//!
+//! [script]
+//! repeat = 2                            # run the steps this many times
+//! steps = ["k5 30 50", "move 0.5", "turn 25", "a535", "pause 1"]
+//!
+//! [tour]                                # optional; how the controller paces itself
+//! pacing = "stop-and-go"                # or "polling" (see robot::control::tour)
+//! settle_s = 0.1                        # stop-and-go: wait after the motors stop
+//! poll_s = 0.05                         # polling: longest wait for a scan between polls
+//! ```
+
+use super::error::{ConfigError, Source, resolve};
+use super::robot_file::RobotDescription;
+use super::values::{NonNegative, Positive, RelativeError};
+use super::world::WorldDescription;
+use core::time::Duration;
+use robot::control::{Pacing, Step, TourConfig};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+use toml::Spanned;
+
+/// How far the twin departs from the robot's nominal description.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct NoiseSettings {
+    /// Per-wheel random slip: each wheel's ground travel gets Gaussian noise of variance
+    /// `σ² · |travel|`, so after 1 m the standard deviation is σ metres. Units: √m.
+    pub slip_sigma_sqrt_m: f64,
+    /// True ratio of right to left wheel diameter, minus one (Borenstein's `E_d − 1`).
+    pub wheel_diameter_ratio_error: f64,
+    /// True mean wheel diameter over the nominal one, minus one.
+    pub wheel_scale_error: f64,
+    /// True track over the nominal one, minus one (Borenstein's `E_b − 1`).
+    pub track_error: f64,
+    /// Standard deviation of the laser's range noise, metres.
+    pub laser_sigma_m: f64,
+}
+
+impl NoiseSettings {
+    /// No slip, no mismatch, no range noise: the twin does exactly what the description says.
+    pub const NONE: NoiseSettings = NoiseSettings {
+        slip_sigma_sqrt_m: 0.0,
+        wheel_diameter_ratio_error: 0.0,
+        wheel_scale_error: 0.0,
+        track_error: 0.0,
+        laser_sigma_m: 0.0,
+    };
+
+    /// The defaults of a scenario without a `[noise]` table: 3 mm/√m of slip per wheel (a
+    /// heading random walk of about 0.7°/√m on a Pioneer), no mismatch, and the robot's own
+    /// laser noise.
+    pub fn defaults_for(robot: &RobotDescription) -> Self {
+        NoiseSettings {
+            slip_sigma_sqrt_m: 0.003,
+            laser_sigma_m: robot.laser.sigma_m.get(),
+            ..NoiseSettings::NONE
+        }
+    }
+}
+
+/// A validated scenario with its world and robot loaded.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scenario {
+    /// Short name (used for the default output folder).
+    pub name: String,
+    /// What the scenario shows.
+    pub description: String,
+    /// The world.
+    pub world: WorldDescription,
+    /// The robot.
+    pub robot: RobotDescription,
+    /// Master seed; every random stream of the twin derives from it.
+    pub seed: u64,
+    /// Noise and mismatch.
+    pub noise: NoiseSettings,
+    /// The script, with its repeats expanded.
+    pub steps: Vec<Step>,
+    /// How the controller paces the script.
+    pub tour: TourConfig,
+    /// The file it was read from.
+    pub path: PathBuf,
+}
+
+impl Scenario {
+    /// Reads a scenario and the world and robot it names.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, ConfigError> {
+        let source = Source::read(path.as_ref())?;
+        let file: ScenarioFile = source.parse()?;
+        let world = load_named(&source, &file.world, "world", |p| WorldDescription::load(p))?;
+        let robot = load_named(&source, &file.robot, "robot", |p| RobotDescription::load(p))?;
+        let mut noise = NoiseSettings::defaults_for(&robot);
+        if let Some(n) = &file.noise {
+            let set = |target: &mut f64, value: Option<f64>| {
+                if let Some(v) = value {
+                    *target = v;
+                }
+            };
+            set(
+                &mut noise.slip_sigma_sqrt_m,
+                n.slip_sigma_sqrt_m.map(NonNegative::get),
+            );
+            set(
+                &mut noise.wheel_diameter_ratio_error,
+                n.wheel_diameter_ratio_error.map(RelativeError::get),
+            );
+            set(
+                &mut noise.wheel_scale_error,
+                n.wheel_scale_error.map(RelativeError::get),
+            );
+            set(
+                &mut noise.track_error,
+                n.track_error.map(RelativeError::get),
+            );
+            set(
+                &mut noise.laser_sigma_m,
+                n.laser_sigma_m.map(NonNegative::get),
+            );
+        }
+        let mut once = Vec::with_capacity(file.script.steps.len());
+        for (i, text) in file.script.steps.iter().enumerate() {
+            let step: Step = text
+                .get_ref()
+                .parse()
+                .map_err(|e: robot::control::StepError| {
+                    source.error(
+                        text.span(),
+                        Some(format!("script.steps[{i}]")),
+                        e.to_string(),
+                    )
+                })?;
+            step.to_line(&robot.geometry()).map_err(|e| {
+                source.error(
+                    text.span(),
+                    Some(format!("script.steps[{i}]")),
+                    e.to_string(),
+                )
+            })?;
+            once.push(step);
+        }
+        let repeat = *file.script.repeat.get_ref();
+        if !(1..=10_000).contains(&repeat) {
+            return Err(source.error(
+                file.script.repeat.span(),
+                Some("script.repeat".into()),
+                format!("expected 1..=10000 repetitions, found {repeat}"),
+            ));
+        }
+        let steps = (0..repeat).flat_map(|_| once.iter().copied()).collect();
+        let mut tour = TourConfig::default();
+        if let Some(t) = &file.tour {
+            let poll = Duration::from_secs_f64(t.poll_s.map_or(0.05, Positive::get));
+            tour.poll = poll;
+            tour.pacing = match t.pacing.as_ref().map(|p| p.get_ref().as_str()) {
+                None | Some("stop-and-go") => Pacing::StopAndGo {
+                    settle: Duration::from_secs_f64(t.settle_s.map_or(0.1, NonNegative::get)),
+                },
+                Some("polling") => Pacing::Polling { period: poll },
+                Some(other) => {
+                    let span = t.pacing.as_ref().map_or(0..0, |p| p.span());
+                    return Err(source.error(
+                        span,
+                        Some("tour.pacing".into()),
+                        format!(
+                            "unknown pacing {other:?}: expected \"stop-and-go\" or \"polling\""
+                        ),
+                    ));
+                }
+            };
+        }
+        Ok(Scenario {
+            name: file.name,
+            description: file.description,
+            world,
+            robot,
+            seed: file.seed,
+            noise,
+            steps,
+            tour,
+            path: source.path.clone(),
+        })
+    }
+}
+
+/// Loads the file a scenario names; an unreadable file is reported at the scenario's line.
+fn load_named<T>(
+    source: &Source,
+    name: &Spanned<String>,
+    field: &str,
+    load: impl Fn(&Path) -> Result<T, ConfigError>,
+) -> Result<T, ConfigError> {
+    let path = resolve(&source.path, name.get_ref());
+    load(&path).map_err(|e| {
+        if e.line.is_none() && e.path == path {
+            source.error(
+                name.span(),
+                Some(field.into()),
+                format!("{}: {}", path.display(), e.message),
+            )
+        } else {
+            e
+        }
+    })
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ScenarioFile {
+    name: String,
+    #[serde(default)]
+    description: String,
+    world: Spanned<String>,
+    robot: Spanned<String>,
+    seed: u64,
+    noise: Option<NoiseFile>,
+    script: ScriptFile,
+    tour: Option<TourFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TourFile {
+    pacing: Option<Spanned<String>>,
+    settle_s: Option<NonNegative>,
+    poll_s: Option<Positive>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct NoiseFile {
+    slip_sigma_sqrt_m: Option<NonNegative>,
+    wheel_diameter_ratio_error: Option<RelativeError>,
+    wheel_scale_error: Option<RelativeError>,
+    track_error: Option<RelativeError>,
+    laser_sigma_m: Option<NonNegative>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ScriptFile {
+    #[serde(default = "once")]
+    repeat: Spanned<u32>,
+    steps: Vec<Spanned<String>>,
+}
+
+fn once() -> Spanned<u32> {
+    Spanned::new(0..0, 1)
+}

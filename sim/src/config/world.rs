@@ -1,0 +1,344 @@
+//! World files: walls and boxes made of named materials, and the robot's start pose.
+//!
+//! ```toml
+//! name = "two rooms"
+//! [start]                      # where the robot is put, metres and degrees
+//! x = 1.0
+//! y = 1.0
+//! heading_deg = 0.0
+//!
+//! [[wall]]                     # a polyline; closed = true joins the last point to the first
+//! material = "matte"           # matte (default), black, glass or metal
+//! points = [[0, 0], [6, 0], [6, 4], [0, 4]]
+//! closed = true
+//!
+//! [[box]]                      # a rectangle: centre, size along its own x and y, heading
+//! center = [3.0, 2.0]
+//! size = [1.2, 0.6]
+//! heading_deg = 30
+//! material = "black"
+//! ```
+//!
+//! Frames follow REP-103: x and y in metres in the world frame, headings counter-clockwise.
+
+use super::error::{ConfigError, Source};
+use robot::Pose2;
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+use toml::Spanned;
+
+/// What a surface is made of; it decides how the laser's beam comes back.
+///
+/// The first laser model treats every material as a diffuse reflector; black surfaces, glass
+/// and metal get their own optics with the sensor-realism work.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+pub enum Material {
+    /// Paint, plaster, wood: returns the beam at any incidence short of grazing.
+    Matte,
+    /// Low reflectivity (black doors, black furniture).
+    Black,
+    /// Glass doors and windows.
+    Glass,
+    /// Polished metal, mirrors.
+    Metal,
+}
+
+impl Material {
+    /// Every material, in the order of [`Material::NAMES`].
+    pub const ALL: [Material; 4] = [
+        Material::Matte,
+        Material::Black,
+        Material::Glass,
+        Material::Metal,
+    ];
+    /// The names accepted in world files.
+    pub const NAMES: [&'static str; 4] = ["matte", "black", "glass", "metal"];
+
+    /// The material called `name`.
+    pub fn from_name(name: &str) -> Option<Material> {
+        Self::NAMES
+            .iter()
+            .position(|n| *n == name)
+            .map(|i| Self::ALL[i])
+    }
+
+    /// The material's name in world files.
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+}
+
+/// A polyline of wall surface.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Wall {
+    /// What the wall is made of.
+    pub material: Material,
+    /// Vertices, metres, world frame.
+    pub points: Vec<[f64; 2]>,
+    /// Whether the last point joins the first.
+    pub closed: bool,
+}
+
+impl Wall {
+    /// The wall's straight pieces.
+    pub fn segments(&self) -> impl Iterator<Item = ([f64; 2], [f64; 2])> + '_ {
+        let n = self.points.len();
+        let count = if self.closed { n } else { n.saturating_sub(1) };
+        (0..count).map(move |i| (self.points[i], self.points[(i + 1) % n]))
+    }
+}
+
+/// A validated world.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorldDescription {
+    /// Short name.
+    pub name: String,
+    /// What the world represents and where it comes from.
+    pub description: String,
+    /// Where the robot starts.
+    pub start: Pose2,
+    /// Every surface, boxes included (as closed walls).
+    pub walls: Vec<Wall>,
+    /// The file it was read from.
+    pub path: PathBuf,
+}
+
+impl WorldDescription {
+    /// Reads and validates a world file.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, ConfigError> {
+        let source = Source::read(path.as_ref())?;
+        Self::from_source(&source)
+    }
+
+    /// Parses and validates world-file text; `path` only names it in errors.
+    pub fn parse(text: &str, path: impl AsRef<Path>) -> Result<Self, ConfigError> {
+        Self::from_source(&Source {
+            path: path.as_ref().to_path_buf(),
+            text: text.to_string(),
+        })
+    }
+
+    fn from_source(source: &Source) -> Result<Self, ConfigError> {
+        let file: WorldFile = source.parse()?;
+        let start = Pose2::new(
+            file.start.x,
+            file.start.y,
+            file.start.heading_deg.to_radians(),
+        );
+        if ![start.x, start.y, start.theta]
+            .iter()
+            .all(|v| v.is_finite())
+        {
+            return Err(source.error_in_file(Some("start".into()), "the start pose must be finite"));
+        }
+        let mut walls = Vec::new();
+        for (i, wall) in file.walls.iter().enumerate() {
+            let field = |name: &str| Some(format!("wall[{i}].{name}"));
+            let material = material(source, &wall.material, field("material"))?;
+            let points = wall.points.get_ref();
+            if points.len() < 2 {
+                return Err(source.error(
+                    wall.points.span(),
+                    field("points"),
+                    format!("a wall needs at least 2 points, found {}", points.len()),
+                ));
+            }
+            let values: Vec<f64> = points.iter().flatten().copied().collect();
+            check_finite(source, wall.points.span(), &values, field("points"))?;
+            walls.push(Wall {
+                material,
+                points: points.clone(),
+                closed: wall.closed,
+            });
+        }
+        for (i, b) in file.boxes.iter().enumerate() {
+            let field = |name: &str| Some(format!("box[{i}].{name}"));
+            let material = material(source, &b.material, field("material"))?;
+            let [w, h] = *b.size.get_ref();
+            if !(w > 0.0 && h > 0.0 && w.is_finite() && h.is_finite()) {
+                return Err(source.error(
+                    b.size.span(),
+                    field("size"),
+                    format!("a box needs a positive finite size, found [{w}, {h}]"),
+                ));
+            }
+            let centre = *b.center.get_ref();
+            check_finite(source, b.center.span(), &centre, field("center"))?;
+            let pose = Pose2::new(centre[0], centre[1], b.heading_deg.to_radians());
+            let corners = [(0.5, 0.5), (-0.5, 0.5), (-0.5, -0.5), (0.5, -0.5)]
+                .map(|(sx, sy)| {
+                    let (x, y) = pose.transform_point(sx * w, sy * h);
+                    [x, y]
+                })
+                .to_vec();
+            walls.push(Wall {
+                material,
+                points: corners,
+                closed: true,
+            });
+        }
+        Ok(WorldDescription {
+            name: file.name,
+            description: file.description,
+            start,
+            walls,
+            path: source.path.clone(),
+        })
+    }
+
+    /// Every straight piece of surface with its material.
+    pub fn segments(&self) -> impl Iterator<Item = ([f64; 2], [f64; 2], Material)> + '_ {
+        self.walls
+            .iter()
+            .flat_map(|w| w.segments().map(move |(a, b)| (a, b, w.material)))
+    }
+
+    /// The smallest axis-aligned box holding every wall and the start, `(min, max)`.
+    pub fn bounds(&self) -> ([f64; 2], [f64; 2]) {
+        let mut min = [self.start.x, self.start.y];
+        let mut max = min;
+        for p in self.walls.iter().flat_map(|w| w.points.iter()) {
+            for k in 0..2 {
+                min[k] = min[k].min(p[k]);
+                max[k] = max[k].max(p[k]);
+            }
+        }
+        (min, max)
+    }
+}
+
+fn material(
+    source: &Source,
+    name: &Spanned<String>,
+    field: Option<String>,
+) -> Result<Material, ConfigError> {
+    Material::from_name(name.get_ref()).ok_or_else(|| {
+        source.error(
+            name.span(),
+            field,
+            format!(
+                "unknown material {:?}: expected one of {}",
+                name.get_ref(),
+                Material::NAMES.join(", ")
+            ),
+        )
+    })
+}
+
+fn check_finite(
+    source: &Source,
+    span: std::ops::Range<usize>,
+    values: &[f64],
+    field: Option<String>,
+) -> Result<(), ConfigError> {
+    match values.iter().find(|v| !v.is_finite()) {
+        Some(v) => Err(source.error(
+            span,
+            field,
+            format!("coordinates must be finite numbers, found {v}"),
+        )),
+        None => Ok(()),
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct WorldFile {
+    name: String,
+    #[serde(default)]
+    description: String,
+    start: StartFile,
+    #[serde(default, rename = "wall")]
+    walls: Vec<WallFile>,
+    #[serde(default, rename = "box")]
+    boxes: Vec<BoxFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StartFile {
+    x: f64,
+    y: f64,
+    #[serde(default)]
+    heading_deg: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct WallFile {
+    #[serde(default = "matte")]
+    material: Spanned<String>,
+    points: Spanned<Vec<[f64; 2]>>,
+    #[serde(default)]
+    closed: bool,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BoxFile {
+    #[serde(default = "matte")]
+    material: Spanned<String>,
+    center: Spanned<[f64; 2]>,
+    size: Spanned<[f64; 2]>,
+    #[serde(default)]
+    heading_deg: f64,
+}
+
+fn matte() -> Spanned<String> {
+    Spanned::new(0..0, "matte".to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const GOOD: &str = r#"
+name = "room"
+[start]
+x = 1
+y = 1
+[[wall]]
+points = [[0, 0], [4, 0], [4, 3], [0, 3]]
+closed = true
+[[box]]
+center = [2.0, 1.5]
+size = [1.0, 0.5]
+material = "black"
+"#;
+
+    #[test]
+    fn a_good_world_has_walls_and_boxes() {
+        let w = WorldDescription::parse(GOOD, "room.toml").unwrap();
+        assert_eq!(w.walls.len(), 2);
+        assert_eq!(w.segments().count(), 8);
+        assert_eq!(w.walls[1].material, Material::Black);
+        assert_eq!(w.bounds(), ([0.0, 0.0], [4.0, 3.0]));
+    }
+
+    #[test]
+    fn an_unknown_material_names_line_field_and_choices() {
+        let text = GOOD.replace("\"black\"", "\"velvet\"");
+        let err = WorldDescription::parse(&text, "room.toml").unwrap_err();
+        assert_eq!(err.line, Some(12), "{err}");
+        assert_eq!(err.field.as_deref(), Some("box[0].material"));
+        assert!(err.message.contains("matte, black, glass, metal"), "{err}");
+    }
+
+    #[test]
+    fn a_one_point_wall_is_refused_where_it_is() {
+        let text = GOOD.replace("[[0, 0], [4, 0], [4, 3], [0, 3]]", "[[0, 0]]");
+        let err = WorldDescription::parse(&text, "room.toml").unwrap_err();
+        assert_eq!(
+            (err.line, err.field.as_deref()),
+            (Some(7), Some("wall[0].points")),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn a_missing_start_coordinate_is_named() {
+        let text = GOOD.replace("y = 1\n", "");
+        let err = WorldDescription::parse(&text, "room.toml").unwrap_err();
+        assert_eq!(err.field.as_deref(), Some("y"), "{err}");
+    }
+}

@@ -1,0 +1,215 @@
+//! The SICK LMS laser rangefinder: 361 beams over 180° in the thesis's configuration, readings in
+//! millimetres, the maximum value (32 m) when nothing comes back.
+//!
+//! A beam is measured in two stages, so richer physics slots in without touching the rest:
+//! 1. *trace* — the first surface along the beam ([`WorldMap::cast`]);
+//! 2. *respond* — what the receiver reports for that surface: for now the true distance plus
+//!    Gaussian noise, kept inside the valid range, or the maximum for no surface within range.
+//!    Surface optics (black, glass, metal), grazing loss and random outliers belong here.
+//!
+//! Timing follows the device: the mirror sweeps a scan in `sweep_s`, and in continuous mode the
+//! LMS sends each scan as a telegram of `telegram_bytes` over its serial line. At 38400 bps a
+//! 732-byte telegram takes 190.6 ms, longer than the sweep, so the line sets the scan rate:
+//! one scan every max(sweep, transfer), delivered a transfer time after it was measured.
+//! All beams of a scan are measured at the scan's stamp.
+
+use crate::config::robot_file::LaserDescription;
+use crate::rng::SimRng;
+use crate::world_map::WorldMap;
+use core::time::Duration;
+use rand_distr::{Distribution, StandardNormal};
+use robot::hardware::LaserScan;
+use robot::{Pose2, Stamp};
+
+/// When scans are taken and when they reach the host.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub struct LaserTiming {
+    /// Time between two scans.
+    pub period: Duration,
+    /// Time from a scan's measurement to its arrival at the host.
+    pub latency: Duration,
+}
+
+impl LaserTiming {
+    /// The timing of a laser that sweeps in `sweep` and sends `telegram_bytes` at `baud`.
+    pub fn new(sweep: Duration, telegram_bytes: u32, baud: u32) -> Self {
+        let transfer = robot::protocol::serial_time(telegram_bytes as usize, baud);
+        LaserTiming {
+            period: sweep.max(transfer),
+            latency: transfer,
+        }
+    }
+}
+
+/// A laser model: geometry, noise and timing.
+#[derive(Clone, Debug)]
+pub struct LaserModel {
+    mount: Pose2,
+    angle_min: f64,
+    angle_increment: f64,
+    range_max_m: f64,
+    range_max_mm: u16,
+    sigma_m: f64,
+    timing: LaserTiming,
+    /// Unit direction of each beam in the laser frame.
+    directions: Vec<[f64; 2]>,
+}
+
+impl LaserModel {
+    /// A laser as described, mounted at `mount` on the base, with range noise `sigma_m`.
+    pub fn new(desc: &LaserDescription, mount: Pose2, sigma_m: f64) -> Self {
+        let beams = usize::from(desc.beams);
+        let fov = desc.fov_deg.get().to_radians();
+        let angle_min = -fov / 2.0;
+        let angle_increment = fov / (beams - 1) as f64;
+        let directions = (0..beams)
+            .map(|i| {
+                let (s, c) = (angle_min + i as f64 * angle_increment).sin_cos();
+                [c, s]
+            })
+            .collect();
+        LaserModel {
+            mount,
+            angle_min,
+            angle_increment,
+            range_max_m: desc.range_max_m.get(),
+            range_max_mm: (desc.range_max_m.get() * 1000.0).round() as u16,
+            sigma_m,
+            timing: LaserTiming::new(
+                Duration::from_secs_f64(desc.sweep_s.get()),
+                desc.telegram_bytes,
+                desc.baud,
+            ),
+            directions,
+        }
+    }
+
+    /// The laser's pose on the base.
+    pub fn mount(&self) -> Pose2 {
+        self.mount
+    }
+
+    /// Scan period and delivery latency.
+    pub fn timing(&self) -> LaserTiming {
+        self.timing
+    }
+
+    /// Measures one scan with the base at `base` (world frame).
+    pub fn scan(&self, map: &WorldMap, base: Pose2, stamp: Stamp, rng: &mut SimRng) -> LaserScan {
+        let laser = base.compose(&self.mount);
+        let (s, c) = laser.theta.sin_cos();
+        let origin = [laser.x, laser.y];
+        let ranges_mm = self
+            .directions
+            .iter()
+            .map(|d| {
+                let dir = [c * d[0] - s * d[1], s * d[0] + c * d[1]];
+                self.beam(map, origin, dir, rng)
+            })
+            .collect();
+        LaserScan {
+            stamp,
+            angle_min: self.angle_min,
+            angle_increment: self.angle_increment,
+            range_max_mm: self.range_max_mm,
+            ranges_mm,
+        }
+    }
+
+    /// One beam: trace, then respond.
+    fn beam(&self, map: &WorldMap, origin: [f64; 2], dir: [f64; 2], rng: &mut SimRng) -> u16 {
+        match map.cast(origin, dir, self.range_max_m) {
+            None => self.range_max_mm,
+            Some(hit) => {
+                let noise: f64 = StandardNormal.sample(rng);
+                let valid_max = f64::from(self.range_max_mm - 1) * 1e-3;
+                let range = (hit.distance + self.sigma_m * noise).clamp(0.0, valid_max);
+                (range * 1000.0).round() as u16
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::WorldDescription;
+    use crate::config::values::{Finite, NonNegative, Positive};
+
+    fn lms(sigma: f64) -> LaserModel {
+        let d = LaserDescription {
+            x_m: Finite(0.0),
+            y_m: Finite(0.0),
+            yaw_deg: Finite(0.0),
+            beams: 361,
+            fov_deg: Positive(180.0),
+            range_max_m: Positive(32.0),
+            sigma_m: NonNegative(sigma),
+            baud: 38_400,
+            sweep_s: Positive(0.02667),
+            telegram_bytes: 732,
+        };
+        LaserModel::new(&d, Pose2::new(0.1, 0.0, 0.0), sigma)
+    }
+
+    fn corridor() -> WorldMap {
+        let text = r#"
+name = "corridor"
+[start]
+x = 0
+y = 0
+[[wall]]
+points = [[-1, 1], [40, 1]]
+[[wall]]
+points = [[-1, -2], [40, -2]]
+"#;
+        WorldMap::new(&WorldDescription::parse(text, "c.toml").unwrap())
+    }
+
+    #[test]
+    fn noiseless_ranges_match_trigonometry() {
+        let laser = lms(0.0);
+        let mut rng = crate::rng::stream(1, "laser");
+        let scan = laser.scan(&corridor(), Pose2::IDENTITY, Stamp::ZERO, &mut rng);
+        assert_eq!(scan.len(), 361);
+        // Beam 360 points left (+90°) to the wall at y = 1 from (0.1, 0): 1 m.
+        assert_eq!(scan.ranges_mm[360], 1000);
+        // Beam 0 points right to y = -2: 2 m.
+        assert_eq!(scan.ranges_mm[0], 2000);
+        // Beam at +30° (index 240) meets y = 1 at 1 / sin 30° = 2 m.
+        assert_eq!(scan.ranges_mm[240], 2000);
+        // Straight ahead the corridor is 40 m long: beyond 32 m, no return.
+        assert_eq!(scan.ranges_mm[180], 32_000);
+        assert_eq!(scan.range_m(180), None);
+    }
+
+    #[test]
+    fn noise_has_the_configured_spread_and_stays_valid() {
+        let laser = lms(0.01);
+        let mut rng = crate::rng::stream(3, "laser");
+        let mut errors = Vec::new();
+        for k in 0..200 {
+            let scan = laser.scan(&corridor(), Pose2::IDENTITY, Stamp(k), &mut rng);
+            errors.push(f64::from(scan.ranges_mm[360]) * 1e-3 - 1.0);
+            assert_eq!(scan.ranges_mm[180], 32_000, "no-return stays the maximum");
+        }
+        let mean = errors.iter().sum::<f64>() / errors.len() as f64;
+        let sd =
+            (errors.iter().map(|e| (e - mean).powi(2)).sum::<f64>() / errors.len() as f64).sqrt();
+        assert!(mean.abs() < 0.003, "{mean}");
+        assert!((sd - 0.01).abs() < 0.002, "{sd}");
+    }
+
+    #[test]
+    fn timing_is_set_by_the_serial_line() {
+        let t = lms(0.0).timing();
+        assert_eq!(t.latency, Duration::from_nanos(190_625_000));
+        assert_eq!(t.period, t.latency);
+        let fast = LaserTiming::new(Duration::from_micros(26_670), 732, 500_000);
+        assert_eq!(
+            fast.period,
+            Duration::from_micros(26_670),
+            "at 500 kbaud the sweep sets the rate"
+        );
+    }
+}

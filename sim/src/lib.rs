@@ -1,0 +1,30 @@
+//! # sim — the digital twin
+//!
+//! A differential-drive robot with a SICK laser in a 2D world, stepped deterministically and far
+//! faster than real time:
+//!
+//! - [`config`]: world, robot and scenario files, with errors that name the file, line and field;
+//! - [`twin`]: the bevy_ecs world and its ordered schedule;
+//! - [`firmware`]: the base microcontroller's C firmware (thesis App. A), ported line by line,
+//!   and the board's serial timing;
+//! - [`motor`], [`battery`], [`laser`], [`world_map`]: the physical models;
+//! - [`sim_robot`]: [`SimRobot`], the twin behind the robot crate's hardware contract, plus the
+//!   sim-only [`GroundTruth`];
+//! - [`run`] and [`output`]: the `twin run` job and the files it writes.
+#![warn(missing_docs)]
+// `ConfigError` carries the file, line, field and excerpt; it is only returned while loading files.
+#![allow(clippy::result_large_err)]
+
+pub mod battery;
+pub mod config;
+pub mod firmware;
+pub mod laser;
+pub mod motor;
+pub mod rng;
+pub mod sim_robot;
+pub mod twin;
+pub mod world_map;
+pub use sim_robot::{GroundTruth, SimError, SimRobot};
+pub use twin::Twin;
+pub mod output;
+pub mod run;

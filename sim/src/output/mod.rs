@@ -1,0 +1,56 @@
+//! The files `twin run` writes: trajectories in TUM format, scans as JSON Lines, a summary, and a
+//! picture of the map.
+//!
+//! Everything but `summary.json` (which reports wall-clock time) is a pure function of the
+//! scenario and the seed: numbers are printed with fixed precision, so two runs give the same
+//! bytes.
+
+mod scans;
+mod summary;
+mod svg;
+mod tum;
+
+pub use scans::{ScanLine, write_scans};
+pub use summary::Summary;
+pub use svg::write_map_svg;
+pub use tum::write_tum;
+
+use crate::config::Scenario;
+use crate::run::RunRecord;
+use std::path::{Path, PathBuf};
+
+/// Where each output file went.
+#[derive(Clone, Debug)]
+pub struct Written {
+    /// The folder.
+    pub dir: PathBuf,
+    /// The files, in the order written.
+    pub files: Vec<PathBuf>,
+}
+
+/// Writes every output of a run into `dir` (created if needed).
+pub fn write_all(record: &RunRecord, scenario: &Scenario, dir: &Path) -> std::io::Result<Written> {
+    std::fs::create_dir_all(dir)?;
+    let mut files = Vec::new();
+    let mut file = |name: &str| {
+        let path = dir.join(name);
+        files.push(path.clone());
+        path
+    };
+    write_tum(
+        &file("truth.tum"),
+        record.scans.iter().map(|r| (r.scan.stamp, r.truth)),
+    )?;
+    write_tum(
+        &file("odometry.tum"),
+        record.scans.iter().map(|r| (r.scan.stamp, r.odometry)),
+    )?;
+    write_scans(&file("scans.jsonl"), &record.scans, record.laser_mount)?;
+    Summary::of(record, (&scenario.world.name, &scenario.robot.name))
+        .write(&file("summary.json"))?;
+    write_map_svg(&file("map.svg"), record, &scenario.world)?;
+    Ok(Written {
+        dir: dir.to_path_buf(),
+        files,
+    })
+}

@@ -1,0 +1,60 @@
+//! Scans as JSON Lines, one object per scan, in the shape later tools read.
+
+use crate::run::ScanRecord;
+use robot::Pose2;
+use serde::Serialize;
+use std::io::{BufWriter, Write};
+use std::path::Path;
+
+/// One line of `scans.jsonl`.
+///
+/// Ranges are metres; a range `>= range_max` means no return. Angles are in the laser frame
+/// (x forward, y left). `odometry` is the robot's `[x, y, theta]` at the scan's time, and
+/// `laser_mount` the laser's `[x, y, theta]` on the robot.
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
+pub struct ScanLine {
+    /// Time of the scan, seconds.
+    pub t: f64,
+    /// Angle of the first beam, radians.
+    pub angle_min: f64,
+    /// Angle between beams, radians.
+    pub angle_increment: f64,
+    /// No-return value, metres.
+    pub range_max: f64,
+    /// Ranges, metres.
+    pub ranges: Vec<f64>,
+    /// Odometry `[x, y, theta]` at `t`.
+    pub odometry: [f64; 3],
+    /// The laser's pose on the base, `[x, y, theta]`.
+    pub laser_mount: [f64; 3],
+}
+
+impl ScanLine {
+    /// The line for a recorded scan by a laser mounted at `mount`.
+    pub fn of(record: &ScanRecord, mount: Pose2) -> Self {
+        let s = &record.scan;
+        ScanLine {
+            t: s.stamp.secs_f64(),
+            angle_min: s.angle_min,
+            angle_increment: s.angle_increment,
+            range_max: s.range_max_m(),
+            ranges: s
+                .ranges_mm
+                .iter()
+                .map(|&mm| f64::from(mm) / 1000.0)
+                .collect(),
+            odometry: [record.odometry.x, record.odometry.y, record.odometry.theta],
+            laser_mount: [mount.x, mount.y, mount.theta],
+        }
+    }
+}
+
+/// Writes one JSON object per scan.
+pub fn write_scans(path: &Path, records: &[ScanRecord], mount: Pose2) -> std::io::Result<()> {
+    let mut out = BufWriter::new(std::fs::File::create(path)?);
+    for r in records {
+        serde_json::to_writer(&mut out, &ScanLine::of(r, mount))?;
+        out.write_all(b"\n")?;
+    }
+    out.flush()
+}

@@ -1,0 +1,213 @@
+//! `map.svg`: the world, the true path, the odometry path, and the scans drawn from both, so the
+//! drift shows at a glance.
+
+use crate::config::{Material, WorldDescription};
+use crate::run::RunRecord;
+use robot::Pose2;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Pixels per metre.
+const SCALE: f64 = 60.0;
+/// Margin around the world, metres.
+const MARGIN: f64 = 0.6;
+/// Most scan points drawn per projection (the rest are thinned out evenly).
+const MAX_POINTS: usize = 60_000;
+
+/// Writes the map picture.
+pub fn write_map_svg(
+    path: &Path,
+    record: &RunRecord,
+    world: &WorldDescription,
+) -> std::io::Result<()> {
+    std::fs::write(path, render(record, world))
+}
+
+struct Frame {
+    min: [f64; 2],
+    max: [f64; 2],
+}
+
+impl Frame {
+    fn x(&self, x: f64) -> f64 {
+        (x - self.min[0] + MARGIN) * SCALE
+    }
+    fn y(&self, y: f64) -> f64 {
+        (self.max[1] + MARGIN - y) * SCALE
+    }
+}
+
+fn render(record: &RunRecord, world: &WorldDescription) -> String {
+    let (mut min, mut max) = world.bounds();
+    for (_, p) in &record.true_path {
+        min = [min[0].min(p.x), min[1].min(p.y)];
+        max = [max[0].max(p.x), max[1].max(p.y)];
+    }
+    let f = Frame { min, max };
+    let width = (max[0] - min[0] + 2.0 * MARGIN) * SCALE;
+    let height = (max[1] - min[1] + 2.0 * MARGIN) * SCALE + 90.0;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{height:.0}" viewBox="0 0 {width:.0} {height:.0}" font-family="sans-serif" font-size="13">"#
+    );
+    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
+
+    // Walls.
+    for wall in &world.walls {
+        let (colour, w) = match wall.material {
+            Material::Matte => ("#c9c9c9", 5.0),
+            Material::Black => ("#8c8c8c", 6.0),
+            Material::Glass => ("#8ec9f0", 5.0),
+            Material::Metal => ("#b3a6c9", 5.0),
+        };
+        let mut d = String::new();
+        for (i, p) in wall.points.iter().enumerate() {
+            let _ = write!(
+                d,
+                "{}{:.1} {:.1}",
+                if i == 0 { "M" } else { "L" },
+                f.x(p[0]),
+                f.y(p[1])
+            );
+        }
+        if wall.closed {
+            d.push('Z');
+        }
+        let _ = writeln!(
+            s,
+            r#"<path d="{d}" stroke="{colour}" stroke-width="{w}" fill="none" stroke-linejoin="round"><title>{}</title></path>"#,
+            wall.material.name()
+        );
+    }
+
+    // Scans drawn from the true pose (what is there, with the laser's noise) and from odometry.
+    let total: usize = record.scans.iter().map(|r| r.scan.len()).sum();
+    let stride = total.div_ceil(MAX_POINTS).max(1);
+    for (colour, label, pick) in [
+        ("#1f3b73", "scans at true pose", true),
+        ("#f08a24", "scans at odometry", false),
+    ] {
+        let mut d = String::new();
+        let mut k = 0usize;
+        for r in &record.scans {
+            let pose = if pick { r.truth } else { r.odometry };
+            let laser = pose.compose(&record.laser_mount);
+            for (_, (lx, ly)) in r.scan.points() {
+                k += 1;
+                if !k.is_multiple_of(stride) {
+                    continue;
+                }
+                let (x, y) = laser.transform_point(lx, ly);
+                let _ = write!(d, "M{:.1} {:.1}h0", f.x(x), f.y(y));
+            }
+        }
+        let _ = writeln!(
+            s,
+            r#"<path d="{d}" stroke="{colour}" stroke-width="2" stroke-linecap="round" fill="none"><title>{label}</title></path>"#
+        );
+    }
+
+    // Paths.
+    let step = record.true_path.len().div_ceil(8000).max(1);
+    let truth: Vec<Pose2> = record
+        .true_path
+        .iter()
+        .step_by(step)
+        .map(|(_, p)| *p)
+        .collect();
+    let odometry: Vec<Pose2> = std::iter::once(world.start)
+        .chain(record.scans.iter().map(|r| r.odometry))
+        .chain(std::iter::once(record.final_odometry))
+        .collect();
+    for (poses, colour, dash, label) in [
+        (&truth, "#1a9850", "", "true path"),
+        (
+            &odometry,
+            "#d73027",
+            r#" stroke-dasharray="6 4""#,
+            "odometry",
+        ),
+    ] {
+        let mut d = String::new();
+        for (i, p) in poses.iter().enumerate() {
+            let _ = write!(
+                d,
+                "{}{:.1} {:.1}",
+                if i == 0 { "M" } else { "L" },
+                f.x(p.x),
+                f.y(p.y)
+            );
+        }
+        let _ = writeln!(
+            s,
+            r#"<path d="{d}" stroke="{colour}" stroke-width="2"{dash} fill="none"><title>{label}</title></path>"#
+        );
+    }
+    for (p, colour) in [
+        (record.final_truth, "#1a9850"),
+        (record.final_odometry, "#d73027"),
+    ] {
+        let (hx, hy) = p.transform_point(0.3, 0.0);
+        let _ = writeln!(
+            s,
+            r#"<circle cx="{:.1}" cy="{:.1}" r="6" fill="none" stroke="{colour}" stroke-width="2"/><line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="{colour}" stroke-width="2"/>"#,
+            f.x(p.x),
+            f.y(p.y),
+            f.x(p.x),
+            f.y(p.y),
+            f.x(hx),
+            f.y(hy)
+        );
+    }
+
+    // Legend and scale bar.
+    let top = height - 82.0;
+    let items = [
+        ("#1a9850", "true path"),
+        ("#d73027", "odometry"),
+        ("#1f3b73", "scans placed at the true pose"),
+        ("#f08a24", "scans placed at odometry"),
+        ("#c9c9c9", "walls (blue glass, violet metal)"),
+    ];
+    for (i, (colour, label)) in items.iter().enumerate() {
+        let x = 12.0 + 280.0 * (i % 3) as f64;
+        let y = top + 20.0 * (i / 3) as f64;
+        let _ = writeln!(
+            s,
+            r#"<rect x="{x:.0}" y="{y:.0}" width="18" height="6" fill="{colour}"/><text x="{:.0}" y="{:.0}">{label}</text>"#,
+            x + 24.0,
+            y + 7.0
+        );
+    }
+    let _ = writeln!(
+        s,
+        r#"<text x="12" y="{:.0}">{}: {} scans, {:.1} m driven in {:.1} s, final odometry error {:.3} m / {:.2}°, seed {}</text>"#,
+        top + 50.0,
+        xml_escape(&record.scenario),
+        record.scans.len(),
+        record.distance_m,
+        record.sim_seconds(),
+        record.final_odometry_error_m(),
+        record.final_odometry_error_deg(),
+        record.seed
+    );
+    let bar_x = width - 12.0 - SCALE;
+    let _ = writeln!(
+        s,
+        r#"<line x1="{bar_x:.0}" y1="{:.0}" x2="{:.0}" y2="{:.0}" stroke="black" stroke-width="3"/><text x="{:.0}" y="{:.0}">1 m</text>"#,
+        top + 46.0,
+        bar_x + SCALE,
+        top + 46.0,
+        bar_x + SCALE / 2.0 - 10.0,
+        top + 40.0
+    );
+    s.push_str("</svg>\n");
+    s
+}
+
+fn xml_escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}

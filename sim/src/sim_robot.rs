@@ -1,0 +1,297 @@
+//! [`SimRobot`]: the twin behind the robot crate's hardware contract.
+//!
+//! Every call goes through the same bytes as on the real robot: a drive command is encoded to its
+//! line, sent over the simulated 9600 bps line to the ported firmware, and the firmware's reply is
+//! read back and parsed. Time passes the way it does for a real controller: sending takes ten
+//! bit-times per byte, the firmware answers when its main loop gets to the line, the reply takes
+//! its own transmission time, and a scan arrives when the laser has sent it. The controller's
+//! clock (the *host* time) advances with those waits; the world is stepped until it has caught up.
+//!
+//! The world steps 8.192 ms at a time, so after a wait it may be up to one step ahead of the
+//! host; a command sent then takes effect at the next firmware tick the world has not simulated
+//! yet (at most one step late).
+//!
+//! Ground truth is not part of the contract: it is offered by the sim-only [`GroundTruth`] trait.
+
+use crate::config::{ConfigError, Scenario};
+use crate::twin::{TICK, Twin};
+use core::time::Duration;
+use robot::hardware::{
+    ArgumentError, Batteries, BatteryVoltages, DriveBase, DriveCommand, DriveStatus, DriveWait,
+    ErrorKind, Hardware, HardwareError, Laser, LaserScan,
+};
+use robot::protocol::base::{
+    BATTERY_REQUEST, ReplyError, STATUS_REQUEST, encode_command, encode_wait, parse_ack,
+    parse_battery, parse_status,
+};
+use robot::protocol::serial_time;
+use robot::{Pose2, Stamp};
+use std::collections::VecDeque;
+
+/// How long the twin waits for a reply beyond what the command itself takes.
+const REPLY_MARGIN: Duration = Duration::from_millis(500);
+
+/// What the twin knows that the robot does not.
+pub trait GroundTruth {
+    /// The true pose of the base now.
+    fn true_pose(&self) -> Pose2;
+    /// The true pose at `t`, or `None` outside the simulated time.
+    fn true_pose_at(&self, t: Stamp) -> Option<Pose2>;
+    /// Length of the true path so far, metres.
+    fn distance_travelled(&self) -> f64;
+    /// Times the base came into contact with a wall.
+    fn collisions(&self) -> u32;
+}
+
+impl GroundTruth for Twin {
+    fn true_pose(&self) -> Pose2 {
+        Twin::true_pose(self)
+    }
+    fn true_pose_at(&self, t: Stamp) -> Option<Pose2> {
+        Twin::true_pose_at(self, t)
+    }
+    fn distance_travelled(&self) -> f64 {
+        Twin::distance_travelled(self)
+    }
+    fn collisions(&self) -> u32 {
+        Twin::collisions(self)
+    }
+}
+
+/// A failure of the simulated hardware.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    /// An argument outside the documented range; nothing was sent.
+    #[error(transparent)]
+    Argument(#[from] ArgumentError),
+    /// The firmware did not answer in time (unknown commands get no answer).
+    #[error("no reply to `{command}` within {waited:?} of simulated time")]
+    Timeout {
+        /// The line sent, without its newline.
+        command: String,
+        /// How long the twin waited.
+        waited: Duration,
+    },
+    /// The firmware answered something the protocol does not allow.
+    #[error(transparent)]
+    Reply(#[from] ReplyError),
+}
+
+impl HardwareError for SimError {
+    fn kind(&self) -> ErrorKind {
+        match self {
+            SimError::Argument(_) => ErrorKind::InvalidArgument,
+            SimError::Timeout { .. } => ErrorKind::Timeout,
+            SimError::Reply(_) => ErrorKind::Protocol,
+        }
+    }
+}
+
+/// The twin, driven through the hardware contract.
+pub struct SimRobot {
+    twin: Twin,
+    /// The controller's clock.
+    host: Stamp,
+    /// Bit rate of the base microcontroller's line.
+    base_baud: u32,
+    /// Bytes received from the base, with their arrival times.
+    rx: VecDeque<(Stamp, u8)>,
+}
+
+impl SimRobot {
+    /// Wraps a twin whose base talks at `base_baud`, and waits for the base's power-on greeting
+    /// (which it discards, as a backend flushes its input when it connects).
+    pub fn new(twin: Twin, base_baud: u32) -> Self {
+        let mut robot = SimRobot {
+            twin,
+            host: Stamp::ZERO,
+            base_baud,
+            rx: VecDeque::new(),
+        };
+        let greeting_done = robot.read_line("(power-on greeting)", Stamp::from_millis(500));
+        debug_assert!(greeting_done.is_ok(), "the firmware greets at power-on");
+        robot.rx.clear();
+        robot
+    }
+
+    /// The twin of a scenario, with its robot at the world's start pose.
+    pub fn from_scenario(scenario: &Scenario) -> Result<Self, ConfigError> {
+        let twin = Twin::new(
+            &scenario.world,
+            &scenario.robot,
+            &scenario.noise,
+            scenario.seed,
+        )?;
+        Ok(Self::new(twin, scenario.robot.drive.serial_baud))
+    }
+
+    /// The twin inside.
+    pub fn twin(&self) -> &Twin {
+        &self.twin
+    }
+
+    /// The twin inside, to step it or look into it.
+    pub fn twin_mut(&mut self) -> &mut Twin {
+        &mut self.twin
+    }
+
+    /// The controller's clock: when its last exchange with the hardware ended.
+    pub fn host_time(&self) -> Stamp {
+        self.host
+    }
+
+    /// Steps the world until it has reached `t`.
+    pub fn advance_to(&mut self, t: Stamp) {
+        while self.twin.now() < t {
+            self.twin.step();
+        }
+    }
+
+    /// Sends one line to the base and returns its reply line and when the firmware wrote it.
+    fn transact(&mut self, line: &str, works_for: Duration) -> Result<(Stamp, String), SimError> {
+        let arrival = self.host + serial_time(line.len(), self.base_baud);
+        self.twin
+            .board_mut()
+            .deliver(arrival, line.as_bytes().to_vec());
+        self.host = arrival;
+        let deadline = arrival + works_for + REPLY_MARGIN;
+        self.read_line(line.trim_end(), deadline)
+    }
+
+    /// Reads the next complete line from the base, stepping the world until it has arrived.
+    /// Returns when the firmware wrote it and the text.
+    fn read_line(&mut self, command: &str, deadline: Stamp) -> Result<(Stamp, String), SimError> {
+        loop {
+            while let Some(byte) = self.twin.board_mut().pop_output() {
+                self.rx.push_back(byte);
+            }
+            if let Some(end) = self.rx.iter().position(|(_, b)| *b == b'\n') {
+                let arrived = self.rx[end].0;
+                if arrived <= deadline {
+                    let written = before(self.rx[0].0, serial_time(1, self.base_baud));
+                    let bytes: Vec<u8> = self.rx.drain(..=end).map(|(_, b)| b).collect();
+                    self.host = self.host.max(arrived);
+                    return Ok((written, String::from_utf8_lossy(&bytes).into_owned()));
+                }
+            }
+            if self.twin.now() >= deadline {
+                let waited = deadline.saturating_since(self.host);
+                self.host = self.host.max(deadline);
+                return Err(SimError::Timeout {
+                    command: command.to_string(),
+                    waited,
+                });
+            }
+            self.twin.step();
+        }
+    }
+}
+
+/// `t − d`, or zero.
+fn before(t: Stamp, d: Duration) -> Stamp {
+    Stamp(t.0.saturating_sub(d.as_nanos() as u64))
+}
+
+impl Hardware for SimRobot {
+    type Error = SimError;
+}
+
+impl DriveBase for SimRobot {
+    fn drive(&mut self, command: DriveCommand) -> Result<(), SimError> {
+        let line = encode_command(&command)?;
+        let (_, reply) = self.transact(&line, Duration::ZERO)?;
+        parse_ack(&reply, command.letter())?;
+        Ok(())
+    }
+
+    fn wait_drive(&mut self, wait: DriveWait) -> Result<(), SimError> {
+        let line = encode_wait(&wait);
+        let ticks = TICK * u32::from(wait.max_ms);
+        let (_, reply) = self.transact(&line, ticks)?;
+        parse_ack(&reply, 'w')?;
+        Ok(())
+    }
+
+    fn drive_status(&mut self) -> Result<DriveStatus, SimError> {
+        let (written, reply) = self.transact(STATUS_REQUEST, Duration::ZERO)?;
+        Ok(parse_status(&reply, written)?)
+    }
+}
+
+impl Laser for SimRobot {
+    fn read_scan(&mut self, timeout: Duration) -> Result<Option<LaserScan>, SimError> {
+        Ok(self.take_scan_by(self.host + timeout))
+    }
+
+    /// Skips older scans without casting their beams. As in the contract's default, the
+    /// timeout restarts with every scan that arrives, kept or not.
+    fn read_scan_since(
+        &mut self,
+        since: Stamp,
+        timeout: Duration,
+    ) -> Result<Option<LaserScan>, SimError> {
+        let mut deadline = self.host + timeout;
+        loop {
+            if let Some(delivery) = self.twin.skip_scans_before(since) {
+                deadline = deadline.max(delivery + timeout);
+            }
+            if self
+                .twin
+                .next_scan_delivery()
+                .is_some_and(|d| d <= deadline)
+            {
+                return Ok(self.take_scan_by(deadline));
+            }
+            if self.twin.now() >= deadline {
+                self.host = self.host.max(deadline);
+                return Ok(None);
+            }
+            self.twin.step();
+        }
+    }
+}
+
+impl SimRobot {
+    /// Steps until a queued scan is delivered by `deadline` (and takes it) or the world reaches
+    /// `deadline`.
+    fn take_scan_by(&mut self, deadline: Stamp) -> Option<LaserScan> {
+        loop {
+            if self
+                .twin
+                .next_scan_delivery()
+                .is_some_and(|d| d <= deadline)
+            {
+                let (delivery, scan) = self.twin.pop_scan().expect("a scan is queued");
+                self.host = self.host.max(delivery);
+                return Some(scan);
+            }
+            if self.twin.now() >= deadline {
+                self.host = self.host.max(deadline);
+                return None;
+            }
+            self.twin.step();
+        }
+    }
+}
+
+impl Batteries for SimRobot {
+    fn battery_voltages(&mut self) -> Result<BatteryVoltages, SimError> {
+        let (written, reply) = self.transact(BATTERY_REQUEST, Duration::ZERO)?;
+        Ok(parse_battery(&reply, written)?)
+    }
+}
+
+impl GroundTruth for SimRobot {
+    fn true_pose(&self) -> Pose2 {
+        self.twin.true_pose()
+    }
+    fn true_pose_at(&self, t: Stamp) -> Option<Pose2> {
+        self.twin.true_pose_at(t)
+    }
+    fn distance_travelled(&self) -> f64 {
+        self.twin.distance_travelled()
+    }
+    fn collisions(&self) -> u32 {
+        self.twin.collisions()
+    }
+}

@@ -1,0 +1,160 @@
+//! What the twin's world is made of: resources shared by everything, and the components of a
+//! robot entity.
+
+use crate::battery::Electrics;
+use crate::firmware::BaseBoard;
+use crate::laser::LaserModel;
+use crate::motor::Motor;
+use crate::rng::SimRng;
+use crate::world_map::WorldMap;
+use bevy_ecs::prelude::*;
+use core::time::Duration;
+use rapier2d::prelude::{ColliderHandle, PhysicsWorld, RigidBodyHandle};
+use robot::{Pose2, Stamp};
+use std::collections::VecDeque;
+
+/// Length of one firmware tick: the base microcontroller's real-time interrupt, 1.024 ms.
+pub const TICK: Duration = Duration::from_nanos(1_024_000);
+
+/// Firmware ticks per world step. The world steps every 8.192 ms; inside a step the firmware and
+/// the motors run tick by tick.
+pub const TICKS_PER_STEP: u32 = 8;
+
+/// Length of one world step.
+pub const STEP: Duration = Duration::from_nanos(1_024_000 * TICKS_PER_STEP as u64);
+
+/// The simulated clock: the step being computed covers `(step_start, now]`.
+#[derive(Resource, Copy, Clone, Debug, Default)]
+pub struct SimClock {
+    /// Start of the current step.
+    pub step_start: Stamp,
+    /// End of the current step (the world's time once the step is done).
+    pub now: Stamp,
+}
+
+/// The rapier world: bodies, colliders and the pipelines that move them.
+#[derive(Resource)]
+pub struct Physics(pub PhysicsWorld);
+
+/// The static surfaces, for ray casts.
+#[derive(Resource)]
+pub struct Map(pub WorldMap);
+
+/// The base microcontroller board of a robot.
+#[derive(Component)]
+pub struct Board(pub BaseBoard);
+
+/// The two drive motors, and how far their rotors turned during the current step.
+#[derive(Component)]
+pub struct Drivetrain {
+    /// Left motor.
+    pub left: Motor,
+    /// Right motor.
+    pub right: Motor,
+    /// Rotor rotation this step, radians (left, right).
+    pub rotation: [f64; 2],
+}
+
+/// How the wheels meet the floor: true wheel sizes and track, and random slip.
+#[derive(Component)]
+pub struct Traction {
+    /// True wheel radii, metres (left, right).
+    pub radius: [f64; 2],
+    /// True track, metres.
+    pub track: f64,
+    /// Motor turns per wheel turn.
+    pub gear_ratio: f64,
+    /// Slip noise, √m (see `NoiseSettings::slip_sigma_sqrt_m`).
+    pub slip_sigma: f64,
+    /// One random stream per wheel.
+    pub rng: [SimRng; 2],
+}
+
+/// The robot's batteries.
+#[derive(Component)]
+pub struct Power(pub Electrics);
+
+/// The rigid body and collider of a robot's base.
+#[derive(Component)]
+pub struct Chassis {
+    /// The rapier body (origin at the wheel axle's centre).
+    pub body: RigidBodyHandle,
+    /// The round footprint.
+    pub collider: ColliderHandle,
+    /// The footprint touches a wall now.
+    pub touching: bool,
+    /// Times the footprint came into contact with a wall.
+    pub collisions: u32,
+}
+
+/// The true path of a robot's base.
+#[derive(Component)]
+pub struct Trajectory {
+    /// Pose at the start of the current step.
+    pub previous: (Stamp, Pose2),
+    /// Pose now.
+    pub current: (Stamp, Pose2),
+    /// Pose at the end of every step.
+    pub history: Vec<(Stamp, Pose2)>,
+    /// Length of the path, metres.
+    pub distance: f64,
+}
+
+impl Trajectory {
+    /// A path that starts at `pose` at time zero.
+    pub fn starting_at(pose: Pose2) -> Self {
+        Trajectory {
+            previous: (Stamp::ZERO, pose),
+            current: (Stamp::ZERO, pose),
+            history: vec![(Stamp::ZERO, pose)],
+            distance: 0.0,
+        }
+    }
+
+    /// The pose at `t`, interpolated between the steps around it (the body moves at constant
+    /// velocity within a step); `None` outside the recorded path.
+    pub fn at(&self, t: Stamp) -> Option<Pose2> {
+        let (first, _) = *self.history.first()?;
+        let (last, last_pose) = *self.history.last()?;
+        if t < first || t > last {
+            return None;
+        }
+        if t == last {
+            return Some(last_pose);
+        }
+        let i = self.history.partition_point(|&(s, _)| s <= t);
+        let (t0, p0) = self.history[i - 1];
+        let (t1, p1) = self.history[i];
+        Some(p0.interpolate(&p1, (t.0 - t0.0) as f64 / (t1.0 - t0.0) as f64))
+    }
+}
+
+/// A scan the laser has measured, on its way to the host. The beams are cast when the host
+/// takes it (the world is static, so the result is the same as at `stamp`), with noise from
+/// substream `index` of the laser's stream.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct PendingScan {
+    /// When the scan was measured.
+    pub stamp: Stamp,
+    /// When it reaches the host.
+    pub delivery: Stamp,
+    /// The base's true pose at `stamp`.
+    pub base: Pose2,
+    /// The scan's number since power-on.
+    pub index: u64,
+}
+
+/// A laser on a robot, with the scans on their way to the host.
+#[derive(Component)]
+pub struct Lidar {
+    /// Geometry, noise and timing.
+    pub model: LaserModel,
+    /// Seed of the laser's random stream.
+    pub stream_seed: u64,
+    /// When the next scan is measured.
+    pub next_due: Stamp,
+    /// Number of the next scan.
+    pub next_index: u64,
+    /// Scans measured and not yet taken by the host.
+    pub outbox: VecDeque<PendingScan>,
+}

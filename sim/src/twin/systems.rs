@@ -1,0 +1,151 @@
+//! The systems of one world step, in the order the schedule runs them:
+//!
+//! 1. [`advance_clock`] — the step covers `(step_start, now]`;
+//! 2. [`run_drive_electronics`] — tick by tick: the motors turn under the H-bridge inputs, the
+//!    board's interrupt fires and its main loop runs the firmware;
+//! 3. [`drive_chassis`] — the wheels' rotation becomes travel on the floor (true wheel sizes,
+//!    random slip) and a velocity for the base's rigid body;
+//! 4. [`step_physics`] — rapier moves the body and stops it at walls;
+//! 5. [`track_pose`] — the true pose is recorded and contacts counted;
+//! 6. [`sense_lasers`] — scans due within the step are recorded with the interpolated pose (their
+//!    beams are cast when the host takes them).
+
+use super::components::*;
+use bevy_ecs::prelude::*;
+use rand_distr::{Distribution, StandardNormal};
+use rapier2d::prelude::Vector;
+use robot::Pose2;
+
+/// Moves the clock one step forward.
+pub fn advance_clock(mut clock: ResMut<SimClock>) {
+    clock.step_start = clock.now;
+    clock.now += STEP;
+}
+
+/// Runs each robot's motors and base microcontroller through the step's ticks.
+pub fn run_drive_electronics(
+    clock: Res<SimClock>,
+    mut robots: Query<(&mut Board, &mut Drivetrain, &mut Power)>,
+) {
+    let dt = TICK.as_secs_f64();
+    for (mut board, mut drive, mut power) in &mut robots {
+        let drive = &mut *drive;
+        let mut tick_time = clock.step_start;
+        for _ in 0..TICKS_PER_STEP {
+            tick_time += TICK;
+            let (left_bridge, right_bridge) = board.0.firmware().bridges();
+            let supply = power.0.motor_supply_v();
+            let left = drive.left.advance(left_bridge, supply, dt);
+            let right = drive.right.advance(right_bridge, supply, dt);
+            drive.rotation[0] += left.rotation;
+            drive.rotation[1] += right.rotation;
+            power.0.draw(left.supply_current + right.supply_current, dt);
+            let adc = power.0.adc();
+            let (l, r) = (&mut drive.left, &mut drive.right);
+            board
+                .0
+                .tick(tick_time, adc, || (l.take_edges(), r.take_edges()));
+        }
+    }
+}
+
+/// Turns the wheels' rotation into floor travel and sets the base's velocity for the step.
+pub fn drive_chassis(
+    mut physics: ResMut<Physics>,
+    mut robots: Query<(&mut Drivetrain, &mut Traction, &Chassis)>,
+) {
+    let dt = STEP.as_secs_f64();
+    for (mut drive, mut traction, chassis) in &mut robots {
+        let rotation = std::mem::take(&mut drive.rotation);
+        let traction = &mut *traction;
+        let mut travel = [0.0; 2];
+        for wheel in 0..2 {
+            let d = rotation[wheel] / traction.gear_ratio * traction.radius[wheel];
+            let slip = if traction.slip_sigma > 0.0 && d != 0.0 {
+                let n: f64 = StandardNormal.sample(&mut traction.rng[wheel]);
+                traction.slip_sigma * d.abs().sqrt() * n
+            } else {
+                0.0
+            };
+            travel[wheel] = d + slip;
+        }
+        let dtheta = (travel[1] - travel[0]) / traction.track;
+        let ds = 0.5 * (travel[0] + travel[1]);
+        let half = 0.5 * dtheta;
+        let chord = if half.abs() < 1e-12 {
+            ds
+        } else {
+            ds * half.sin() / half
+        };
+        let body = &mut physics.0.bodies[chassis.body];
+        let heading = f64::from(body.rotation().angle()) + half;
+        let velocity = Vector::new(
+            (chord * heading.cos() / dt) as f32,
+            (chord * heading.sin() / dt) as f32,
+        );
+        let moving = chord != 0.0 || dtheta != 0.0;
+        body.set_linvel(velocity, moving);
+        body.set_angvel((dtheta / dt) as f32, moving);
+    }
+}
+
+/// Advances the rigid bodies by one step.
+pub fn step_physics(mut physics: ResMut<Physics>) {
+    physics.0.step();
+}
+
+/// Records where each base is now and whether it touches a wall.
+pub fn track_pose(
+    physics: Res<Physics>,
+    clock: Res<SimClock>,
+    mut robots: Query<(&mut Chassis, &mut Trajectory)>,
+) {
+    for (mut chassis, mut path) in &mut robots {
+        let body = &physics.0.bodies[chassis.body];
+        let t = body.translation();
+        let pose = Pose2::new(
+            f64::from(t.x),
+            f64::from(t.y),
+            f64::from(body.rotation().angle()),
+        );
+        path.previous = path.current;
+        path.current = (clock.now, pose);
+        path.distance += path.previous.1.distance(&pose);
+        path.history.push((clock.now, pose));
+        let touching = physics
+            .0
+            .narrow_phase
+            .contact_pairs_with(chassis.collider)
+            .any(|pair| pair.has_any_active_contact());
+        if touching && !chassis.touching {
+            chassis.collisions += 1;
+        }
+        chassis.touching = touching;
+    }
+}
+
+/// Records the scans that fell due during the step, with the pose at their exact time.
+pub fn sense_lasers(clock: Res<SimClock>, mut robots: Query<(&Trajectory, &mut Lidar)>) {
+    for (path, mut lidar) in &mut robots {
+        let lidar = &mut *lidar;
+        let timing = lidar.model.timing();
+        while lidar.next_due <= clock.now {
+            let t = lidar.next_due;
+            let (t0, p0) = path.previous;
+            let (t1, p1) = path.current;
+            let s = if t1 > t0 {
+                (t.0.saturating_sub(t0.0) as f64 / (t1.0 - t0.0) as f64).min(1.0)
+            } else {
+                1.0
+            };
+            lidar.outbox.push_back(PendingScan {
+                stamp: t,
+                delivery: t + timing.latency,
+                base: p0.interpolate(&p1, s),
+                index: lidar.next_index,
+            });
+            lidar.next_index += 1;
+            lidar.next_due += timing.period;
+        }
+    }
+}
