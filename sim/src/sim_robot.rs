@@ -8,8 +8,9 @@
 //! clock (the *host* time) advances with those waits; the world is stepped until it has caught up.
 //!
 //! The world steps 8.192 ms at a time, so after a wait it may be up to one step ahead of the
-//! host; a command sent then takes effect at the next firmware tick the world has not simulated
-//! yet (at most one step late).
+//! controller's clock (or further, if you step the twin yourself: that is the controller
+//! sleeping). Before every exchange the controller's clock catches up with the world, so a command
+//! is never sent into the simulated past; exchanges are thus timed to within one step.
 //!
 //! Ground truth is not part of the contract: it is offered by the sim-only [`GroundTruth`] trait.
 
@@ -147,8 +148,14 @@ impl SimRobot {
         }
     }
 
+    /// The controller cannot act before the world's present: its clock catches up.
+    fn catch_up(&mut self) {
+        self.host = self.host.max(self.twin.now());
+    }
+
     /// Sends one line to the base and returns its reply line and when the firmware wrote it.
     fn transact(&mut self, line: &str, works_for: Duration) -> Result<(Stamp, String), SimError> {
+        self.catch_up();
         let arrival = self.host + serial_time(line.len(), self.base_baud);
         self.twin
             .board_mut()
@@ -220,6 +227,7 @@ impl DriveBase for SimRobot {
 
 impl Laser for SimRobot {
     fn read_scan(&mut self, timeout: Duration) -> Result<Option<LaserScan>, SimError> {
+        self.catch_up();
         Ok(self.take_scan_by(self.host + timeout))
     }
 
@@ -230,6 +238,7 @@ impl Laser for SimRobot {
         since: Stamp,
         timeout: Duration,
     ) -> Result<Option<LaserScan>, SimError> {
+        self.catch_up();
         let mut deadline = self.host + timeout;
         loop {
             if let Some(delivery) = self.twin.skip_scans_before(since) {

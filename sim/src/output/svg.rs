@@ -13,6 +13,16 @@ const SCALE: f64 = 60.0;
 const MARGIN: f64 = 0.6;
 /// Most scan points drawn per projection (the rest are thinned out evenly).
 const MAX_POINTS: usize = 60_000;
+/// Width of one legend column, pixels.
+const LEGEND_COLUMN: f64 = 280.0;
+/// The legend's entries.
+const LEGEND: [(&str, &str); 5] = [
+    ("#1a9850", "true path"),
+    ("#d73027", "odometry"),
+    ("#1f3b73", "scans placed at the true pose"),
+    ("#f08a24", "scans placed at odometry"),
+    ("#c9c9c9", "walls (blue glass, violet metal)"),
+];
 
 /// Writes the map picture.
 pub fn write_map_svg(
@@ -44,8 +54,11 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
         max = [max[0].max(p.x), max[1].max(p.y)];
     }
     let f = Frame { min, max };
-    let width = (max[0] - min[0] + 2.0 * MARGIN) * SCALE;
-    let height = (max[1] - min[1] + 2.0 * MARGIN) * SCALE + 90.0;
+    let width = ((max[0] - min[0] + 2.0 * MARGIN) * SCALE).max(LEGEND_COLUMN + 24.0);
+    let columns = (((width - 24.0) / LEGEND_COLUMN).floor() as usize).clamp(1, 3);
+    let legend_rows = LEGEND.len().div_ceil(columns);
+    let legend_height = 20.0 * legend_rows as f64 + 50.0;
+    let height = (max[1] - min[1] + 2.0 * MARGIN) * SCALE + legend_height;
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -161,18 +174,11 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
         );
     }
 
-    // Legend and scale bar.
-    let top = height - 82.0;
-    let items = [
-        ("#1a9850", "true path"),
-        ("#d73027", "odometry"),
-        ("#1f3b73", "scans placed at the true pose"),
-        ("#f08a24", "scans placed at odometry"),
-        ("#c9c9c9", "walls (blue glass, violet metal)"),
-    ];
-    for (i, (colour, label)) in items.iter().enumerate() {
-        let x = 12.0 + 280.0 * (i % 3) as f64;
-        let y = top + 20.0 * (i / 3) as f64;
+    // Legend, figures and scale bar.
+    let top = height - legend_height + 8.0;
+    for (i, (colour, label)) in LEGEND.iter().enumerate() {
+        let x = 12.0 + LEGEND_COLUMN * (i % columns) as f64;
+        let y = top + 20.0 * (i / columns) as f64;
         let _ = writeln!(
             s,
             r#"<rect x="{x:.0}" y="{y:.0}" width="18" height="6" fill="{colour}"/><text x="{:.0}" y="{:.0}">{label}</text>"#,
@@ -180,27 +186,31 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
             y + 7.0
         );
     }
+    let figures_y = top + 20.0 * legend_rows as f64 + 6.0;
     let _ = writeln!(
         s,
-        r#"<text x="12" y="{:.0}">{}: {} scans, {:.1} m driven in {:.1} s, final odometry error {:.3} m / {:.2}°, seed {}</text>"#,
-        top + 50.0,
+        r#"<text x="12" y="{figures_y:.0}">{}: {} scans, {:.1} m in {:.1} s, seed {}</text>"#,
         xml_escape(&record.scenario),
         record.scans.len(),
         record.distance_m,
         record.sim_seconds(),
-        record.final_odometry_error_m(),
-        record.final_odometry_error_deg(),
         record.seed
     );
-    let bar_x = width - 12.0 - SCALE;
     let _ = writeln!(
         s,
-        r#"<line x1="{bar_x:.0}" y1="{:.0}" x2="{:.0}" y2="{:.0}" stroke="black" stroke-width="3"/><text x="{:.0}" y="{:.0}">1 m</text>"#,
-        top + 46.0,
+        r#"<text x="12" y="{:.0}">final odometry error {:.3} m, {:.2}°</text>"#,
+        figures_y + 18.0,
+        record.final_odometry_error_m(),
+        record.final_odometry_error_deg(),
+    );
+    let bar_x = width - 12.0 - SCALE;
+    let bar_y = figures_y + 14.0;
+    let _ = writeln!(
+        s,
+        r#"<line x1="{bar_x:.0}" y1="{bar_y:.0}" x2="{:.0}" y2="{bar_y:.0}" stroke="black" stroke-width="3"/><text x="{:.0}" y="{:.0}">1 m</text>"#,
         bar_x + SCALE,
-        top + 46.0,
         bar_x + SCALE / 2.0 - 10.0,
-        top + 40.0
+        bar_y - 6.0
     );
     s.push_str("</svg>\n");
     s
