@@ -62,6 +62,15 @@ impl DriveGeometry {
     }
 }
 
+/// The Pioneer-class geometry the unit tests use.
+#[cfg(test)]
+pub(crate) const TEST_GEOMETRY: DriveGeometry = DriveGeometry {
+    wheel_diameter_m: 0.195,
+    track_m: 0.333,
+    gear_ratio: 65.5,
+    counts_per_rotor_turn: 1000,
+};
+
 fn to_u16(x: f64) -> Option<u16> {
     (x.is_finite() && (0.0..=f64::from(u16::MAX)).contains(&x)).then_some(x as u16)
 }
@@ -70,12 +79,7 @@ fn to_u16(x: f64) -> Option<u16> {
 mod tests {
     use super::*;
 
-    const G: DriveGeometry = DriveGeometry {
-        wheel_diameter_m: 0.195,
-        track_m: 0.333,
-        gear_ratio: 65.5,
-        counts_per_rotor_turn: 1000,
-    };
+    const G: DriveGeometry = TEST_GEOMETRY;
 
     #[test]
     fn turn_and_counts_are_inverse() {

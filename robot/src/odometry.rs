@@ -1,5 +1,6 @@
-//! Dead reckoning from the firmware's wheel counters, and a FIFO of odometry poses that can be
-//! interpolated to the timestamp of a scan (Aparicio 2011, §7.3.3).
+//! Dead reckoning from the firmware's wheel counters, and a time-ordered history of poses that
+//! can be interpolated to any instant — the odometry FIFO of Aparicio 2011, §7.3.3, which brings
+//! odometry to the timestamp of a scan.
 //!
 //! The base firmware reports, with `l`, the encoder counts of each wheel since the last `a r i d`
 //! command. Its encoders count edges without direction, so the odometer must know which way the
@@ -120,12 +121,13 @@ pub fn integrate_arc(pose: Pose2, left: f64, right: f64, track: f64) -> Pose2 {
     }
 }
 
-/// A time-ordered FIFO of odometry poses, interpolated on demand.
+/// A time-ordered FIFO of poses, interpolated on demand: odometry waiting for the scans it must
+/// be paired with, or any path to be looked up by time.
 ///
 /// ```
-/// use robot::odometry::OdometryHistory;
+/// use robot::odometry::PoseHistory;
 /// use robot::{Pose2, Stamp};
-/// let mut h = OdometryHistory::new(100);
+/// let mut h = PoseHistory::new(100);
 /// h.push(Stamp::from_millis(0), Pose2::new(0.0, 0.0, 0.0));
 /// h.push(Stamp::from_millis(100), Pose2::new(1.0, 0.0, 0.2));
 /// let p = h.at(Stamp::from_millis(25)).unwrap();
@@ -133,18 +135,38 @@ pub fn integrate_arc(pose: Pose2, left: f64, right: f64, track: f64) -> Pose2 {
 /// assert!(h.at(Stamp::from_millis(101)).is_none());
 /// ```
 #[derive(Clone, Debug)]
-pub struct OdometryHistory {
+pub struct PoseHistory {
     entries: VecDeque<(Stamp, Pose2)>,
     capacity: usize,
 }
 
-impl OdometryHistory {
+impl PoseHistory {
     /// An empty history that keeps at most `capacity` poses (the oldest are dropped).
     pub fn new(capacity: usize) -> Self {
-        OdometryHistory {
+        PoseHistory {
             entries: VecDeque::new(),
             capacity: capacity.max(2),
         }
+    }
+
+    /// An empty history that keeps every pose.
+    pub fn unbounded() -> Self {
+        Self::new(usize::MAX)
+    }
+
+    /// Number of poses kept.
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// Whether no pose is kept.
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+
+    /// The poses, oldest first.
+    pub fn iter(&self) -> impl ExactSizeIterator<Item = (Stamp, Pose2)> + '_ {
+        self.entries.iter().copied()
     }
 
     /// Appends a pose. A stamp equal to the newest replaces it; an older stamp is ignored.
@@ -191,12 +213,7 @@ mod tests {
     use super::*;
     use crate::hardware::DriveStatus;
 
-    const G: DriveGeometry = DriveGeometry {
-        wheel_diameter_m: 0.195,
-        track_m: 0.333,
-        gear_ratio: 65.5,
-        counts_per_rotor_turn: 1000,
-    };
+    const G: DriveGeometry = crate::drive_geometry::TEST_GEOMETRY;
 
     fn status(l: u32, r: u32) -> DriveStatus {
         DriveStatus {
@@ -259,7 +276,7 @@ mod tests {
 
     #[test]
     fn history_replaces_equal_stamps_and_ignores_older_ones() {
-        let mut h = OdometryHistory::new(3);
+        let mut h = PoseHistory::new(3);
         h.push(Stamp(10), Pose2::new(1.0, 0.0, 0.0));
         h.push(Stamp(10), Pose2::new(2.0, 0.0, 0.0));
         h.push(Stamp(5), Pose2::new(9.0, 0.0, 0.0));

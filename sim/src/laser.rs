@@ -122,7 +122,7 @@ impl LaserModel {
             None => self.range_max_mm,
             Some(hit) => {
                 let noise: f64 = StandardNormal.sample(rng);
-                let valid_max = f64::from(self.range_max_mm - 1) * 1e-3;
+                let valid_max = f64::from(self.range_max_mm.saturating_sub(1)) * 1e-3;
                 let range = (hit.distance + self.sigma_m * noise).clamp(0.0, valid_max);
                 (range * 1000.0).round() as u16
             }

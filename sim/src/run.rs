@@ -162,7 +162,7 @@ pub fn run_scenario(
         collisions: twin.collisions(),
         final_truth: twin.true_pose(),
         final_odometry: report.final_odometry,
-        true_path: twin.true_path().to_vec(),
+        true_path: twin.true_path().collect(),
         laser_mount: twin.laser().mount(),
         battery_charge: twin.battery_charge(),
     })

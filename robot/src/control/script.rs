@@ -153,12 +153,7 @@ mod tests {
     use super::*;
     use crate::hardware::DriveCommand;
 
-    const G: DriveGeometry = DriveGeometry {
-        wheel_diameter_m: 0.195,
-        track_m: 0.333,
-        gear_ratio: 65.5,
-        counts_per_rotor_turn: 1000,
-    };
+    const G: DriveGeometry = crate::drive_geometry::TEST_GEOMETRY;
 
     #[test]
     fn si_steps_become_firmware_commands() {

@@ -22,7 +22,7 @@ use crate::control::script::{Step, StepError};
 use crate::drive_geometry::DriveGeometry;
 use crate::geometry::Pose2;
 use crate::hardware::{DriveBase, DriveStatus, DriveWait, HardwareError, Laser, LaserScan};
-use crate::odometry::{Odometer, OdometryHistory};
+use crate::odometry::{Odometer, PoseHistory};
 use crate::protocol::base::DriveLine;
 use crate::time::Stamp;
 use core::time::Duration;
@@ -157,7 +157,7 @@ where
         geometry,
         config: *config,
         odometer: Odometer::new(geometry, start),
-        history: OdometryHistory::new(4096),
+        history: PoseHistory::new(4096),
         pending: VecDeque::new(),
         last_status: None,
         scans: 0,
@@ -215,7 +215,7 @@ struct Tour {
     geometry: DriveGeometry,
     config: TourConfig,
     odometer: Odometer,
-    history: OdometryHistory,
+    history: PoseHistory,
     /// Scans received but not yet bracketed by a status report.
     pending: VecDeque<LaserScan>,
     last_status: Option<DriveStatus>,

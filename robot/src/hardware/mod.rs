@@ -29,7 +29,9 @@ pub use drive::{
     WHEEL_SPEED_LIMIT,
 };
 pub use laser::LaserScan;
-pub use pan_tilt::{PAN_MAX, PanTiltCommand, PanTiltStatus, PanTiltWait, TILT_MAX};
+pub use pan_tilt::{
+    PAN_MAX, PanTiltCommand, PanTiltPosition, PanTiltStatus, PanTiltWait, TILT_MAX,
+};
 pub use sonar::{SONAR_COUNT, SONAR_NO_ECHO, SONAR_TIME_UNIT_S, SonarCommand, SonarEchoes};
 
 use core::time::Duration;

@@ -30,7 +30,7 @@ enum Command {
     Run {
         /// The scenario file (e.g. scenarios/lab-tour.toml).
         scenario: PathBuf,
-        /// Output folder [default: out/<scenario name>].
+        /// Output folder [default: out/SCENARIO-NAME].
         #[arg(long)]
         out: Option<PathBuf>,
         /// Seed replacing the scenario's.

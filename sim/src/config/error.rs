@@ -73,6 +73,14 @@ impl Source {
         })
     }
 
+    /// Text already in memory; `path` only names it in errors.
+    pub fn text(text: &str, path: &Path) -> Source {
+        Source {
+            path: path.to_path_buf(),
+            text: text.to_string(),
+        }
+    }
+
     /// Deserializes the whole file, turning TOML and type errors into located errors.
     pub fn parse<T: DeserializeOwned>(&self) -> Result<T, ConfigError> {
         toml::from_str(&self.text).map_err(|e| {

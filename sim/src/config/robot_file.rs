@@ -128,16 +128,12 @@ fn zero() -> Finite {
 impl RobotDescription {
     /// Reads and validates a robot description.
     pub fn load(path: impl AsRef<Path>) -> Result<Self, ConfigError> {
-        let source = Source::read(path.as_ref())?;
-        Self::from_source(&source)
+        Self::from_source(&Source::read(path.as_ref())?)
     }
 
     /// Parses and validates robot-description text; `path` only names it in errors.
     pub fn parse(text: &str, path: impl AsRef<Path>) -> Result<Self, ConfigError> {
-        Self::from_source(&Source {
-            path: path.as_ref().to_path_buf(),
-            text: text.to_string(),
-        })
+        Self::from_source(&Source::text(text, path.as_ref()))
     }
 
     fn from_source(source: &Source) -> Result<Self, ConfigError> {

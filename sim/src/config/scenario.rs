@@ -131,23 +131,17 @@ impl Scenario {
         }
         let mut once = Vec::with_capacity(file.script.steps.len());
         for (i, text) in file.script.steps.iter().enumerate() {
-            let step: Step = text
+            let step = text
                 .get_ref()
-                .parse()
-                .map_err(|e: robot::control::StepError| {
+                .parse::<Step>()
+                .and_then(|step| step.to_line(&robot.geometry()).map(|_| step))
+                .map_err(|e| {
                     source.error(
                         text.span(),
                         Some(format!("script.steps[{i}]")),
                         e.to_string(),
                     )
                 })?;
-            step.to_line(&robot.geometry()).map_err(|e| {
-                source.error(
-                    text.span(),
-                    Some(format!("script.steps[{i}]")),
-                    e.to_string(),
-                )
-            })?;
             once.push(step);
         }
         let repeat = *file.script.repeat.get_ref();

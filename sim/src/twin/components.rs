@@ -10,6 +10,7 @@ use crate::world_map::WorldMap;
 use bevy_ecs::prelude::*;
 use core::time::Duration;
 use rapier2d::prelude::{ColliderHandle, PhysicsWorld, RigidBodyHandle};
+use robot::odometry::PoseHistory;
 use robot::{Pose2, Stamp};
 use std::collections::VecDeque;
 
@@ -94,8 +95,9 @@ pub struct Trajectory {
     pub previous: (Stamp, Pose2),
     /// Pose now.
     pub current: (Stamp, Pose2),
-    /// Pose at the end of every step.
-    pub history: Vec<(Stamp, Pose2)>,
+    /// Pose at the end of every step; the body moves at constant velocity within a step, so
+    /// interpolating it gives the pose at any time.
+    pub history: PoseHistory,
     /// Length of the path, metres.
     pub distance: f64,
 }
@@ -103,29 +105,14 @@ pub struct Trajectory {
 impl Trajectory {
     /// A path that starts at `pose` at time zero.
     pub fn starting_at(pose: Pose2) -> Self {
+        let mut history = PoseHistory::unbounded();
+        history.push(Stamp::ZERO, pose);
         Trajectory {
             previous: (Stamp::ZERO, pose),
             current: (Stamp::ZERO, pose),
-            history: vec![(Stamp::ZERO, pose)],
+            history,
             distance: 0.0,
         }
-    }
-
-    /// The pose at `t`, interpolated between the steps around it (the body moves at constant
-    /// velocity within a step); `None` outside the recorded path.
-    pub fn at(&self, t: Stamp) -> Option<Pose2> {
-        let (first, _) = *self.history.first()?;
-        let (last, last_pose) = *self.history.last()?;
-        if t < first || t > last {
-            return None;
-        }
-        if t == last {
-            return Some(last_pose);
-        }
-        let i = self.history.partition_point(|&(s, _)| s <= t);
-        let (t0, p0) = self.history[i - 1];
-        let (t1, p1) = self.history[i];
-        Some(p0.interpolate(&p1, (t.0 - t0.0) as f64 / (t1.0 - t0.0) as f64))
     }
 }
 

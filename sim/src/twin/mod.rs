@@ -281,12 +281,12 @@ impl Twin {
 
     /// The true pose at `t`, or `None` outside the simulated time.
     pub fn true_pose_at(&self, t: Stamp) -> Option<Pose2> {
-        self.component::<Trajectory>().at(t)
+        self.component::<Trajectory>().history.at(t)
     }
 
-    /// The true path, one pose per step.
-    pub fn true_path(&self) -> &[(Stamp, Pose2)] {
-        &self.component::<Trajectory>().history
+    /// The true path, one pose per step, oldest first.
+    pub fn true_path(&self) -> impl ExactSizeIterator<Item = (Stamp, Pose2)> + '_ {
+        self.component::<Trajectory>().history.iter()
     }
 
     /// Length of the true path, metres.
