@@ -7,6 +7,7 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use robot::{Pose2, Stamp};
 use sim::config::{RobotDescription, WorldDescription};
 use sim::laser::LaserModel;
+use sim::laser::outliers::Outliers;
 use sim::world_map::WorldMap;
 use std::hint::black_box;
 use std::path::Path;
@@ -16,7 +17,12 @@ fn scans(c: &mut Criterion) {
     let world = WorldDescription::load(root.join("worlds/lab.toml")).unwrap();
     let robot = RobotDescription::load(root.join("scenarios/robots/pioneer-3dx.toml")).unwrap();
     let map = WorldMap::new(&world);
-    let laser = LaserModel::new(&robot.laser, robot.laser_mount(), robot.laser.sigma_m.get());
+    let laser = LaserModel::new(
+        &robot.laser,
+        robot.laser_mount(),
+        robot.laser.sigma_m.get(),
+        Outliers::NONE,
+    );
     // Poses on a grid over both labs and the corridor, away from walls.
     let poses: Vec<Pose2> = (0..8)
         .flat_map(|i| (0..4).map(move |j| (i, j)))
@@ -36,7 +42,7 @@ fn scans(c: &mut Criterion) {
     group.bench_function("lab.toml scan, 361 beams, noise", |b| {
         b.iter(|| {
             k = (k + 1) % poses.len();
-            black_box(laser.scan(&map, poses[k], Stamp(k as u64), &mut rng))
+            black_box(laser.scan(&map, None, poses[k], Stamp(k as u64), &mut rng))
         })
     });
     group.finish();

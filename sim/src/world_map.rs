@@ -6,6 +6,7 @@
 //! it with each.
 
 use crate::config::{Material, WorldDescription};
+use crate::laser::beam::Optics;
 use parry2d::bounding_volume::BoundingVolume;
 use parry2d::math::Vector;
 use parry2d::partitioning::{Bvh, BvhBuildStrategy};
@@ -28,6 +29,7 @@ pub struct Hit {
 /// Static world geometry with its materials.
 #[derive(Clone)]
 pub struct WorldMap {
+    optics: Optics,
     tree: Bvh,
     shapes: Vec<Segment>,
     segments: Vec<([f64; 2], [f64; 2])>,
@@ -57,11 +59,17 @@ impl WorldMap {
                 .enumerate(),
         );
         WorldMap {
+            optics: world.optics,
             tree,
             shapes,
             segments,
             materials,
         }
+    }
+
+    /// How the world's materials answer the laser.
+    pub fn optics(&self) -> &Optics {
+        &self.optics
     }
 
     /// The segments, metres.

@@ -12,6 +12,8 @@
 //! wheel_scale_error = 0.002             # true mean diameter / nominal − 1
 //! track_error = 0.01                    # true track / nominal − 1
 //! laser_sigma_m = 0.01                  # overrides the robot's laser σ
+//! outliers = "thesis-2pct"              # none, thesis-2pct, thesis-20pct, indoor, or a table
+//!                                       # { uniform = 0.02, short = 0.0, dropout = 0.01 }
 //!
 //! [script]
 //! repeat = 2                            # run the steps this many times
@@ -25,8 +27,9 @@
 
 use super::error::{ConfigError, Source, resolve};
 use super::robot_file::RobotDescription;
-use super::values::{NonNegative, Positive, RelativeError};
+use super::values::{NonNegative, Positive, RelativeError, UnitInterval};
 use super::world::WorldDescription;
+use crate::laser::outliers::Outliers;
 use core::time::Duration;
 use robot::control::{Pacing, Step, TourConfig};
 use serde::Deserialize;
@@ -47,6 +50,8 @@ pub struct NoiseSettings {
     pub track_error: f64,
     /// Standard deviation of the laser's range noise, metres.
     pub laser_sigma_m: f64,
+    /// Random laser outliers.
+    pub outliers: Outliers,
 }
 
 impl NoiseSettings {
@@ -57,6 +62,7 @@ impl NoiseSettings {
         wheel_scale_error: 0.0,
         track_error: 0.0,
         laser_sigma_m: 0.0,
+        outliers: Outliers::NONE,
     };
 
     /// The defaults of a scenario without a `[noise]` table: 3 mm/√m of slip per wheel (a
@@ -103,31 +109,7 @@ impl Scenario {
         let robot = load_named(&source, &file.robot, "robot", |p| RobotDescription::load(p))?;
         let mut noise = NoiseSettings::defaults_for(&robot);
         if let Some(n) = &file.noise {
-            let set = |target: &mut f64, value: Option<f64>| {
-                if let Some(v) = value {
-                    *target = v;
-                }
-            };
-            set(
-                &mut noise.slip_sigma_sqrt_m,
-                n.slip_sigma_sqrt_m.map(NonNegative::get),
-            );
-            set(
-                &mut noise.wheel_diameter_ratio_error,
-                n.wheel_diameter_ratio_error.map(RelativeError::get),
-            );
-            set(
-                &mut noise.wheel_scale_error,
-                n.wheel_scale_error.map(RelativeError::get),
-            );
-            set(
-                &mut noise.track_error,
-                n.track_error.map(RelativeError::get),
-            );
-            set(
-                &mut noise.laser_sigma_m,
-                n.laser_sigma_m.map(NonNegative::get),
-            );
+            n.apply(&mut noise, &source)?;
         }
         let mut once = Vec::with_capacity(file.script.steps.len());
         for (i, text) in file.script.steps.iter().enumerate() {
@@ -239,6 +221,75 @@ struct NoiseFile {
     wheel_scale_error: Option<RelativeError>,
     track_error: Option<RelativeError>,
     laser_sigma_m: Option<NonNegative>,
+    outliers: Option<Spanned<OutliersFile>>,
+}
+
+impl NoiseFile {
+    /// Overrides the settings this table names.
+    fn apply(&self, noise: &mut NoiseSettings, source: &Source) -> Result<(), ConfigError> {
+        let set = |target: &mut f64, value: Option<f64>| {
+            if let Some(v) = value {
+                *target = v;
+            }
+        };
+        set(
+            &mut noise.slip_sigma_sqrt_m,
+            self.slip_sigma_sqrt_m.map(NonNegative::get),
+        );
+        set(
+            &mut noise.wheel_diameter_ratio_error,
+            self.wheel_diameter_ratio_error.map(RelativeError::get),
+        );
+        set(
+            &mut noise.wheel_scale_error,
+            self.wheel_scale_error.map(RelativeError::get),
+        );
+        set(
+            &mut noise.track_error,
+            self.track_error.map(RelativeError::get),
+        );
+        set(
+            &mut noise.laser_sigma_m,
+            self.laser_sigma_m.map(NonNegative::get),
+        );
+        let Some(o) = &self.outliers else {
+            return Ok(());
+        };
+        let invalid =
+            |message: String| source.error(o.span(), Some("noise.outliers".into()), message);
+        noise.outliers = match o.get_ref() {
+            OutliersFile::Preset(name) => Outliers::preset(name).ok_or_else(|| {
+                let names: Vec<&str> = Outliers::PRESETS.iter().map(|(n, _)| *n).collect();
+                invalid(format!(
+                    "unknown outlier preset {name:?}: expected one of {}, or a table {{ uniform, short, dropout }}",
+                    names.join(", ")
+                ))
+            })?,
+            OutliersFile::Rates { uniform, short, dropout } => {
+                let rates = Outliers {
+                    uniform: uniform.map_or(0.0, UnitInterval::get),
+                    short: short.map_or(0.0, UnitInterval::get),
+                    dropout: dropout.map_or(0.0, UnitInterval::get),
+                };
+                if rates.uniform + rates.short + rates.dropout > 1.0 {
+                    return Err(invalid("the outlier rates add up to more than 1".into()));
+                }
+                rates
+            }
+        };
+        Ok(())
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum OutliersFile {
+    Preset(String),
+    Rates {
+        uniform: Option<UnitInterval>,
+        short: Option<UnitInterval>,
+        dropout: Option<UnitInterval>,
+    },
 }
 
 #[derive(Deserialize)]

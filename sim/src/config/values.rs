@@ -49,3 +49,7 @@ checked_number!(
     /// A relative error in −0.5..=0.5 (a systematic mismatch such as 0.01 for 1 %).
     RelativeError, "a relative error in -0.5..=0.5", |v| (-0.5..=0.5).contains(&v)
 );
+checked_number!(
+    /// An incidence angle in degrees, 0..=90.
+    Angle, "an angle in 0..=90 degrees", |v| (0.0..=90.0).contains(&v)
+);

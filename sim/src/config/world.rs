@@ -17,11 +17,22 @@
 //! size = [1.2, 0.6]
 //! heading_deg = 30
 //! material = "black"
+//!
+//! [optics]                     # optional: how the materials answer the laser (defaults shown)
+//! grazing_deg = 85             # no surface returns a pulse beyond this incidence
+//! black_full_deg = 20          # black returns always up to here…
+//! black_lost_deg = 50          # …and never from here
+//! glass_return_deg = 8         # glass returns the pulse itself within this incidence…
+//! glass_transparent = 0.5      # …beyond, a window with this chance, else a mirror
+//! metal_return_deg = 3         # metal returns within this incidence, mirrors beyond
+//! max_bounces = 3
 //! ```
 //!
 //! Frames follow REP-103: x and y in metres in the world frame, headings counter-clockwise.
 
 use super::error::{ConfigError, Source};
+use super::values::{Angle, UnitInterval};
+use crate::laser::beam::Optics;
 use robot::Pose2;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -99,6 +110,8 @@ pub struct WorldDescription {
     pub start: Pose2,
     /// Every surface, boxes included (as closed walls).
     pub walls: Vec<Wall>,
+    /// How the materials answer the laser.
+    pub optics: Optics,
     /// The file it was read from.
     pub path: PathBuf,
 }
@@ -173,11 +186,15 @@ impl WorldDescription {
                 closed: true,
             });
         }
+        let optics = file
+            .optics
+            .map_or_else(Optics::default, |o| o.into_optics());
         Ok(WorldDescription {
             name: file.name,
             description: file.description,
             start,
             walls,
+            optics,
             path: source.path.clone(),
         })
     }
@@ -248,6 +265,37 @@ struct WorldFile {
     walls: Vec<WallFile>,
     #[serde(default, rename = "box")]
     boxes: Vec<BoxFile>,
+    optics: Option<OpticsFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct OpticsFile {
+    grazing_deg: Option<Angle>,
+    black_full_deg: Option<Angle>,
+    black_lost_deg: Option<Angle>,
+    glass_return_deg: Option<Angle>,
+    glass_transparent: Option<UnitInterval>,
+    metal_return_deg: Option<Angle>,
+    max_bounces: Option<u32>,
+}
+
+impl OpticsFile {
+    fn into_optics(self) -> Optics {
+        let d = Optics::default();
+        let rad = |v: Option<Angle>, default: f64| v.map_or(default, |a| a.get().to_radians());
+        Optics {
+            grazing: rad(self.grazing_deg, d.grazing),
+            black_full: rad(self.black_full_deg, d.black_full),
+            black_lost: rad(self.black_lost_deg, d.black_lost),
+            glass_return: rad(self.glass_return_deg, d.glass_return),
+            glass_transparent: self
+                .glass_transparent
+                .map_or(d.glass_transparent, UnitInterval::get),
+            metal_return: rad(self.metal_return_deg, d.metal_return),
+            max_bounces: self.max_bounces.unwrap_or(d.max_bounces),
+        }
+    }
 }
 
 #[derive(Deserialize)]

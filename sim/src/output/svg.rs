@@ -3,6 +3,7 @@
 
 use crate::config::{Material, WorldDescription};
 use crate::run::RunRecord;
+use crate::world_map::WorldMap;
 use robot::Pose2;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -15,12 +16,15 @@ const MARGIN: f64 = 0.6;
 const MAX_POINTS: usize = 60_000;
 /// Width of one legend column, pixels.
 const LEGEND_COLUMN: f64 = 280.0;
+/// How far from every surface a point must be to count as a ghost, metres.
+const GHOST_MARGIN: f64 = 0.15;
 /// The legend's entries.
-const LEGEND: [(&str, &str); 5] = [
+const LEGEND: [(&str, &str); 6] = [
     ("#1a9850", "true path"),
     ("#d73027", "odometry"),
     ("#1f3b73", "scans placed at the true pose"),
     ("#f08a24", "scans placed at odometry"),
+    ("#e0115f", "ghosts: no surface there"),
     ("#c9c9c9", "walls (blue glass, violet metal)"),
 ];
 
@@ -95,26 +99,34 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
     }
 
     // Scans drawn from the true pose (what is there, with the laser's noise) and from odometry.
+    // A point where there is no surface — a mirror image off glass or metal, or an outlier — is
+    // a ghost, drawn apart.
+    let map = WorldMap::new(world);
     let total: usize = record.scans.iter().map(|r| r.scan.len()).sum();
     let stride = total.div_ceil(MAX_POINTS).max(1);
-    for (colour, label, pick) in [
-        ("#1f3b73", "scans at true pose", true),
-        ("#f08a24", "scans at odometry", false),
-    ] {
-        let mut d = String::new();
-        let mut k = 0usize;
-        for r in &record.scans {
-            let pose = if pick { r.truth } else { r.odometry };
-            let laser = pose.compose(&record.laser_mount);
-            for (_, (lx, ly)) in r.scan.points() {
-                k += 1;
-                if !k.is_multiple_of(stride) {
-                    continue;
-                }
-                let (x, y) = laser.transform_point(lx, ly);
-                let _ = write!(d, "M{:.1} {:.1}h0", f.x(x), f.y(y));
+    let (mut seen, mut ghosts, mut drifted) = (String::new(), String::new(), String::new());
+    let mut k = 0usize;
+    for r in &record.scans {
+        let truth = r.truth.compose(&record.laser_mount);
+        let odometry = r.odometry.compose(&record.laser_mount);
+        for (_, (lx, ly)) in r.scan.points() {
+            k += 1;
+            if !k.is_multiple_of(stride) {
+                continue;
             }
+            let (x, y) = truth.transform_point(lx, ly);
+            let ghost = map.clearance([x, y]) > GHOST_MARGIN;
+            let target = if ghost { &mut ghosts } else { &mut seen };
+            let _ = write!(target, "M{:.1} {:.1}h0", f.x(x), f.y(y));
+            let (x, y) = odometry.transform_point(lx, ly);
+            let _ = write!(drifted, "M{:.1} {:.1}h0", f.x(x), f.y(y));
         }
+    }
+    for (d, colour, label) in [
+        (&drifted, "#f08a24", "scans at odometry"),
+        (&seen, "#1f3b73", "scans at true pose"),
+        (&ghosts, "#e0115f", "ghosts: no surface there"),
+    ] {
         let _ = writeln!(
             s,
             r#"<path d="{d}" stroke="{colour}" stroke-width="2" stroke-linecap="round" fill="none"><title>{label}</title></path>"#

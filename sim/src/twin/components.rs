@@ -82,6 +82,10 @@ pub struct Chassis {
     pub body: RigidBodyHandle,
     /// The round footprint.
     pub collider: ColliderHandle,
+    /// Radius of the footprint, metres.
+    pub radius: f64,
+    /// Centre of the footprint ahead of the axle, metres.
+    pub center_x: f64,
     /// The footprint touches a wall now.
     pub touching: bool,
     /// Times the footprint came into contact with a wall.

@@ -18,6 +18,7 @@ use crate::battery::Electrics;
 use crate::config::{ConfigError, NoiseSettings, RobotDescription, WorldDescription};
 use crate::firmware::{BaseBoard, BaseFirmware};
 use crate::laser::LaserModel;
+use crate::laser::beam::Disc;
 use crate::motor::{Motor, MotorParams};
 use crate::rng;
 use crate::world_map::WorldMap;
@@ -120,6 +121,7 @@ impl Twin {
             &robot_desc.laser,
             robot_desc.laser_mount(),
             noise.laser_sigma_m,
+            noise.outliers,
         );
 
         let mut world = World::new();
@@ -148,6 +150,8 @@ impl Twin {
                 Chassis {
                     body,
                     collider,
+                    radius,
+                    center_x: robot_desc.body.center_x_m.get(),
                     touching: false,
                     collisions: 0,
                 },
@@ -253,8 +257,16 @@ impl Twin {
         let pending = self.component_mut::<Lidar>().outbox.pop_front()?;
         let map = &self.world.resource::<Map>().0;
         let lidar = self.component::<Lidar>();
+        let chassis = self.component::<Chassis>();
+        let (cx, cy) = pending.base.transform_point(chassis.center_x, 0.0);
+        let body = Disc {
+            center: [cx, cy],
+            radius: chassis.radius,
+        };
         let mut rng = rng::substream(lidar.stream_seed, pending.index);
-        let scan = lidar.model.scan(map, pending.base, pending.stamp, &mut rng);
+        let scan = lidar
+            .model
+            .scan(map, Some(body), pending.base, pending.stamp, &mut rng);
         Some((pending.delivery, scan))
     }
 

@@ -176,7 +176,12 @@ mod tests {
             sweep_s: Positive(0.02667),
             telegram_bytes: 732,
         };
-        let model = LaserModel::new(&desc, Pose2::IDENTITY, 0.0);
+        let model = LaserModel::new(
+            &desc,
+            Pose2::IDENTITY,
+            0.0,
+            crate::laser::outliers::Outliers::NONE,
+        );
         let latency = model.timing().latency;
         let mut world = World::new();
         world.insert_resource(SimClock {

@@ -1,11 +1,13 @@
 //! The SICK LMS laser rangefinder: 361 beams over 180° in the thesis's configuration, readings in
 //! millimetres, the maximum value (32 m) when nothing comes back.
 //!
-//! A beam is measured in two stages, so richer physics slots in without touching the rest:
-//! 1. *trace* — the first surface along the beam ([`WorldMap::cast`]);
-//! 2. *respond* — what the receiver reports for that surface: for now the true distance plus
-//!    Gaussian noise, kept inside the valid range, or the maximum for no surface within range.
-//!    Surface optics (black, glass, metal), grazing loss and random outliers belong here.
+//! A beam is measured in three stages:
+//! 1. [`beam::trace`] follows the pulse through the world: what it meets, by which material, and
+//!    whether it comes back (black surfaces, glass windows and mirrors, metal, grazing loss);
+//! 2. Gaussian range noise is added to a pulse that came back, kept inside the valid range;
+//! 3. [`outliers::Outliers`] may replace the reading by a random one.
+//!
+//! A reading with nothing coming back within range is the maximum (32 m).
 //!
 //! Timing follows the device: the mirror sweeps a scan in `sweep_s`, and in continuous mode the
 //! LMS sends each scan as a telegram of `telegram_bytes` over its serial line. At 38400 bps a
@@ -13,10 +15,15 @@
 //! one scan every max(sweep, transfer), delivered a transfer time after it was measured.
 //! All beams of a scan are measured at the scan's stamp.
 
+pub mod beam;
+pub mod outliers;
+
 use crate::config::robot_file::LaserDescription;
 use crate::rng::SimRng;
 use crate::world_map::WorldMap;
+use beam::{Disc, Echo};
 use core::time::Duration;
+use outliers::Outliers;
 use rand_distr::{Distribution, StandardNormal};
 use robot::hardware::LaserScan;
 use robot::{Pose2, Stamp};
@@ -50,14 +57,16 @@ pub struct LaserModel {
     range_max_m: f64,
     range_max_mm: u16,
     sigma_m: f64,
+    outliers: Outliers,
     timing: LaserTiming,
     /// Unit direction of each beam in the laser frame.
     directions: Vec<[f64; 2]>,
 }
 
 impl LaserModel {
-    /// A laser as described, mounted at `mount` on the base, with range noise `sigma_m`.
-    pub fn new(desc: &LaserDescription, mount: Pose2, sigma_m: f64) -> Self {
+    /// A laser as described, mounted at `mount` on the base, with range noise `sigma_m` and
+    /// `outliers`.
+    pub fn new(desc: &LaserDescription, mount: Pose2, sigma_m: f64, outliers: Outliers) -> Self {
         let beams = usize::from(desc.beams);
         let fov = desc.fov_deg.get().to_radians();
         let angle_min = -fov / 2.0;
@@ -75,6 +84,7 @@ impl LaserModel {
             range_max_m: desc.range_max_m.get(),
             range_max_mm: (desc.range_max_m.get() * 1000.0).round() as u16,
             sigma_m,
+            outliers,
             timing: LaserTiming::new(
                 Duration::from_secs_f64(desc.sweep_s.get()),
                 desc.telegram_bytes,
@@ -94,8 +104,21 @@ impl LaserModel {
         self.timing
     }
 
-    /// Measures one scan with the base at `base` (world frame).
-    pub fn scan(&self, map: &WorldMap, base: Pose2, stamp: Stamp, rng: &mut SimRng) -> LaserScan {
+    /// The maximum range, metres.
+    pub fn range_max_m(&self) -> f64 {
+        self.range_max_m
+    }
+
+    /// Measures one scan with the base at `base` (world frame). `body` is the robot's own
+    /// footprint, which reflected beams can meet.
+    pub fn scan(
+        &self,
+        map: &WorldMap,
+        body: Option<Disc>,
+        base: Pose2,
+        stamp: Stamp,
+        rng: &mut SimRng,
+    ) -> LaserScan {
         let laser = base.compose(&self.mount);
         let (s, c) = laser.theta.sin_cos();
         let origin = [laser.x, laser.y];
@@ -104,7 +127,10 @@ impl LaserModel {
             .iter()
             .map(|d| {
                 let dir = [c * d[0] - s * d[1], s * d[0] + c * d[1]];
-                self.beam(map, origin, dir, rng)
+                self.reading_mm(
+                    beam::trace(map, map.optics(), body, origin, dir, self.range_max_m, rng),
+                    rng,
+                )
             })
             .collect();
         LaserScan {
@@ -116,15 +142,23 @@ impl LaserModel {
         }
     }
 
-    /// One beam: trace, then respond.
-    fn beam(&self, map: &WorldMap, origin: [f64; 2], dir: [f64; 2], rng: &mut SimRng) -> u16 {
-        match map.cast(origin, dir, self.range_max_m) {
-            None => self.range_max_mm,
-            Some(hit) => {
-                let noise: f64 = StandardNormal.sample(rng);
+    /// What the receiver reports for an echo: noise, then perhaps an outlier, in millimetres.
+    pub fn reading_mm(&self, echo: Echo, rng: &mut SimRng) -> u16 {
+        let echo = match self.outliers.draw(echo, self.range_max_m, rng) {
+            Some(outlier) => outlier,
+            None => match echo {
+                Echo::Range(r) => {
+                    let noise: f64 = StandardNormal.sample(rng);
+                    Echo::Range(r + self.sigma_m * noise)
+                }
+                Echo::Lost => Echo::Lost,
+            },
+        };
+        match echo {
+            Echo::Lost => self.range_max_mm,
+            Echo::Range(r) => {
                 let valid_max = f64::from(self.range_max_mm.saturating_sub(1)) * 1e-3;
-                let range = (hit.distance + self.sigma_m * noise).clamp(0.0, valid_max);
-                (range * 1000.0).round() as u16
+                (r.clamp(0.0, valid_max) * 1000.0).round() as u16
             }
         }
     }
@@ -149,7 +183,7 @@ mod tests {
             sweep_s: Positive(0.02667),
             telegram_bytes: 732,
         };
-        LaserModel::new(&d, Pose2::new(0.1, 0.0, 0.0), sigma)
+        LaserModel::new(&d, Pose2::new(0.1, 0.0, 0.0), sigma, Outliers::NONE)
     }
 
     fn corridor() -> WorldMap {
@@ -170,7 +204,7 @@ points = [[-1, -2], [40, -2]]
     fn noiseless_ranges_match_trigonometry() {
         let laser = lms(0.0);
         let mut rng = crate::rng::stream(1, "laser");
-        let scan = laser.scan(&corridor(), Pose2::IDENTITY, Stamp::ZERO, &mut rng);
+        let scan = laser.scan(&corridor(), None, Pose2::IDENTITY, Stamp::ZERO, &mut rng);
         assert_eq!(scan.len(), 361);
         // Beam 360 points left (+90°) to the wall at y = 1 from (0.1, 0): 1 m.
         assert_eq!(scan.ranges_mm[360], 1000);
@@ -189,7 +223,7 @@ points = [[-1, -2], [40, -2]]
         let mut rng = crate::rng::stream(3, "laser");
         let mut errors = Vec::new();
         for k in 0..200 {
-            let scan = laser.scan(&corridor(), Pose2::IDENTITY, Stamp(k), &mut rng);
+            let scan = laser.scan(&corridor(), None, Pose2::IDENTITY, Stamp(k), &mut rng);
             errors.push(f64::from(scan.ranges_mm[360]) * 1e-3 - 1.0);
             assert_eq!(scan.ranges_mm[180], 32_000, "no-return stays the maximum");
         }

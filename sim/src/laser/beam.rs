@@ -1,0 +1,362 @@
+//! How one laser beam comes back — or does not — from what it meets (thesis §3.2.1, Fig. 3.1–3.2).
+//!
+//! A time-of-flight laser reports half the path its pulse travelled before coming back. What the
+//! pulse meets decides what that path is:
+//!
+//! - **any surface at grazing incidence** sends the pulse away: nothing comes back, and the LMS
+//!   reports its maximum;
+//! - **matte** surfaces (paint, plaster, wood) scatter the pulse back at any other incidence;
+//! - **black**, low-reflectivity surfaces return it seen head-on but lose it at oblique incidence
+//!   (the thesis's black, slightly wavy door): the chance of a return falls linearly from
+//!   `black_full` to none at `black_lost`;
+//! - **glass** returns the pulse itself near the normal; otherwise, by chance, it is a window (the
+//!   pulse goes on) or a mirror (the pulse reflects, reaches another object and comes back the same
+//!   way, so the reading is the glass distance plus the distance beyond: objects, the robot
+//!   itself included, appear behind the glass);
+//! - **metal** and mirrors return the pulse near the normal and reflect it otherwise.
+//!
+//! A pulse that has been reflected or transmitted `max_bounces` times, or has travelled the
+//! laser's maximum range, is lost.
+
+use crate::config::Material;
+use crate::rng::SimRng;
+use crate::world_map::WorldMap;
+use parry2d::math::{Pose, Vector};
+use parry2d::query::{Ray, RayCast};
+use parry2d::shape::Ball;
+use rand::RngExt;
+
+/// The optical behaviour of the world's materials. Angles are incidence angles from the
+/// surface normal, radians.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Optics {
+    /// Beyond this incidence no surface returns the pulse.
+    pub grazing: f64,
+    /// Black surfaces always return the pulse up to this incidence…
+    pub black_full: f64,
+    /// …and never from this incidence on.
+    pub black_lost: f64,
+    /// Glass returns the pulse itself below this incidence (zero: never, a perfect mirror).
+    pub glass_return: f64,
+    /// Beyond it, the chance that glass lets the pulse through (else it mirrors it).
+    pub glass_transparent: f64,
+    /// Metal returns the pulse itself below this incidence, and mirrors it from there on.
+    pub metal_return: f64,
+    /// Reflections and transmissions followed before the pulse is lost.
+    pub max_bounces: u32,
+}
+
+impl Default for Optics {
+    /// Grazing at 85°, black lost between 20° and 50°, glass returning within 8° and otherwise
+    /// transparent half the time, metal returning within 3°, three bounces.
+    fn default() -> Self {
+        Optics {
+            grazing: 85f64.to_radians(),
+            black_full: 20f64.to_radians(),
+            black_lost: 50f64.to_radians(),
+            glass_return: 8f64.to_radians(),
+            glass_transparent: 0.5,
+            metal_return: 3f64.to_radians(),
+            max_bounces: 3,
+        }
+    }
+}
+
+/// A round obstacle that moves: the robot's own body, which reflected pulses can meet.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Disc {
+    /// Centre, world frame, metres.
+    pub center: [f64; 2],
+    /// Radius, metres.
+    pub radius: f64,
+}
+
+/// What the receiver gets back from one pulse.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub enum Echo {
+    /// The pulse came back after travelling this far one way, metres.
+    Range(f64),
+    /// Nothing came back.
+    Lost,
+}
+
+/// What the pulse met next.
+struct Contact {
+    distance: f64,
+    normal: [f64; 2],
+    material: Material,
+}
+
+/// Follows one pulse from `origin` along the unit direction `dir`.
+///
+/// The first leg starts inside the robot, so the robot's `body` is only seen by reflected or
+/// transmitted legs.
+pub fn trace(
+    map: &WorldMap,
+    optics: &Optics,
+    body: Option<Disc>,
+    origin: [f64; 2],
+    dir: [f64; 2],
+    max_range: f64,
+    rng: &mut SimRng,
+) -> Echo {
+    let mut travelled = 0.0;
+    let (mut o, mut d) = (origin, dir);
+    for leg in 0..=optics.max_bounces {
+        let remaining = max_range - travelled;
+        if remaining <= 0.0 {
+            return Echo::Lost;
+        }
+        let Some(contact) = first_contact(map, if leg == 0 { None } else { body }, o, d, remaining)
+        else {
+            return Echo::Lost;
+        };
+        travelled += contact.distance;
+        let n = contact.normal;
+        let cos_incidence = -(d[0] * n[0] + d[1] * n[1]);
+        let incidence = cos_incidence.clamp(-1.0, 1.0).acos();
+        if incidence >= optics.grazing {
+            return Echo::Lost;
+        }
+        let hit = [
+            o[0] + d[0] * contact.distance,
+            o[1] + d[1] * contact.distance,
+        ];
+        match contact.material {
+            Material::Matte => return Echo::Range(travelled),
+            Material::Black => {
+                let span = optics.black_lost - optics.black_full;
+                let p = if span > 0.0 {
+                    ((optics.black_lost - incidence) / span).clamp(0.0, 1.0)
+                } else {
+                    f64::from(u8::from(incidence < optics.black_full))
+                };
+                return if rng.random_bool(p) {
+                    Echo::Range(travelled)
+                } else {
+                    Echo::Lost
+                };
+            }
+            Material::Glass if incidence < optics.glass_return => return Echo::Range(travelled),
+            Material::Glass if rng.random_bool(optics.glass_transparent) => {
+                // Through the pane: go on from just beyond it.
+                o = [hit[0] + d[0] * NUDGE, hit[1] + d[1] * NUDGE];
+            }
+            Material::Metal if incidence < optics.metal_return => return Echo::Range(travelled),
+            Material::Glass | Material::Metal => {
+                // Specular reflection, leaving from just in front of the surface.
+                let k = 2.0 * (d[0] * n[0] + d[1] * n[1]);
+                d = [d[0] - k * n[0], d[1] - k * n[1]];
+                o = [hit[0] + n[0] * NUDGE, hit[1] + n[1] * NUDGE];
+            }
+        }
+    }
+    Echo::Lost
+}
+
+/// How far a continued pulse starts from the surface it left, metres.
+const NUDGE: f64 = 1e-5;
+
+fn first_contact(
+    map: &WorldMap,
+    body: Option<Disc>,
+    origin: [f64; 2],
+    dir: [f64; 2],
+    max: f64,
+) -> Option<Contact> {
+    let wall = map.cast(origin, dir, max).map(|hit| Contact {
+        distance: hit.distance,
+        normal: hit.normal,
+        material: hit.material,
+    });
+    let Some(disc) = body else { return wall };
+    let limit = wall.as_ref().map_or(max, |w| w.distance);
+    let ray = Ray::new(
+        Vector::new(origin[0] as f32, origin[1] as f32),
+        Vector::new(dir[0] as f32, dir[1] as f32),
+    );
+    let at = Pose::from_translation(Vector::new(disc.center[0] as f32, disc.center[1] as f32));
+    match Ball::new(disc.radius as f32).cast_ray_and_get_normal(&at, &ray, limit as f32, true) {
+        Some(hit) if hit.time_of_impact > 0.0 => Some(Contact {
+            distance: f64::from(hit.time_of_impact),
+            normal: [f64::from(hit.normal.x), f64::from(hit.normal.y)],
+            material: Material::Matte,
+        }),
+        _ => wall,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::WorldDescription;
+
+    fn map(text: &str) -> WorldMap {
+        WorldMap::new(&WorldDescription::parse(text, "t.toml").unwrap())
+    }
+
+    fn echo(
+        m: &WorldMap,
+        optics: &Optics,
+        body: Option<Disc>,
+        origin: [f64; 2],
+        angle_deg: f64,
+        seed: u64,
+    ) -> Echo {
+        let a = angle_deg.to_radians();
+        trace(
+            m,
+            optics,
+            body,
+            origin,
+            [a.cos(), a.sin()],
+            32.0,
+            &mut crate::rng::substream(seed, 0),
+        )
+    }
+
+    /// A pulse from (4, 0) meets one long wall x = 5 of `material` at `incidence` degrees.
+    fn at_incidence(material: &str, incidence: f64, seed: u64) -> Echo {
+        let m = map(&format!(
+            "name = \"wall\"\n[start]\nx = 0\ny = 0\n[[wall]]\nmaterial = \"{material}\"\npoints = [[5, -100], [5, 100]]\n"
+        ));
+        echo(&m, &Optics::default(), None, [4.0, 0.0], incidence, seed)
+    }
+
+    const ROOM: &str = r#"
+name = "room"
+[start]
+x = 0
+y = 0
+[[wall]]
+points = [[-5, -5], [5, -5], [5, 5], [-5, 5]]
+closed = true
+"#;
+
+    #[test]
+    fn matte_returns_until_grazing() {
+        for (incidence, returns) in [(0.0, true), (80.0, true), (84.0, true), (86.0, false), (89.0, false)] {
+            let e = at_incidence("matte", incidence, 1);
+            assert_eq!(matches!(e, Echo::Range(_)), returns, "{incidence}°: {e:?}");
+        }
+        let Echo::Range(r) = at_incidence("matte", 60.0, 1) else { panic!() };
+        assert!((r - 2.0).abs() < 1e-5, "1 m / cos 60° = 2 m, got {r}");
+    }
+
+    #[test]
+    fn a_mirror_reads_the_path_to_the_object_behind() {
+        // A metal mirror along x = 3 facing the origin; a wall at y = 4.
+        let m = map(r#"
+name = "mirror"
+[start]
+x = 0
+y = 0
+[[wall]]
+material = "metal"
+points = [[3, -2], [3, 6]]
+[[wall]]
+points = [[-10, 4], [2.9, 4]]
+"#);
+        let o = Optics::default();
+        // At 45° up-right the pulse meets the mirror at (3, 3) after 3√2 m, reflects up-left and
+        // meets y = 4 after another √2 m.
+        let e = echo(&m, &o, None, [0.0, 0.0], 45.0, 1);
+        let Echo::Range(r) = e else { panic!("{e:?}") };
+        assert!((r - 4.0 * 2f64.sqrt()).abs() < 1e-5, "{r}");
+    }
+
+    #[test]
+    fn the_robot_sees_itself_in_a_mirror() {
+        let m = map(r#"
+name = "mirror"
+[start]
+x = 0
+y = 0
+[[wall]]
+material = "metal"
+points = [[2, -3], [2, 3]]
+"#);
+        let o = Optics {
+            metal_return: 0.0, // a perfect mirror: never returns the pulse itself
+            ..Optics::default()
+        };
+        let body = Disc {
+            center: [-0.1, 0.0],
+            radius: 0.25,
+        };
+        // Head-on the pulse comes straight back to the laser, through the robot's own body:
+        // mirror at 2 m, then back to the front of the body at 2 - 0.15 m.
+        let e = echo(&m, &o, Some(body), [0.0, 0.0], 0.0, 1);
+        let Echo::Range(r) = e else { panic!("{e:?}") };
+        assert!((r - (2.0 + 1.85)).abs() < 1e-4, "{r}");
+    }
+
+    #[test]
+    fn black_is_seen_head_on_and_lost_obliquely() {
+        for seed in 0..50 {
+            assert_eq!(at_incidence("black", 0.0, seed), Echo::Range(1.0));
+            assert_eq!(at_incidence("black", 60.0, seed), Echo::Lost);
+        }
+        // Between, a fair share comes back: at 35° the chance is one half.
+        let back = (0..400)
+            .filter(|&s| matches!(at_incidence("black", 35.0, s), Echo::Range(_)))
+            .count();
+        assert!((150..250).contains(&back), "{back}/400");
+    }
+
+    #[test]
+    fn glass_returns_near_normal_and_is_window_or_mirror_beyond() {
+        let m = map(r#"
+name = "glass"
+[start]
+x = 0
+y = 0
+[[wall]]
+material = "glass"
+points = [[2, -10], [2, 10]]
+[[wall]]
+points = [[6, -20], [6, 20]]
+[[wall]]
+points = [[-3, -20], [-3, 20]]
+"#);
+        let o = Optics::default();
+        assert_eq!(echo(&m, &o, None, [0.0, 0.0], 0.0, 1), Echo::Range(2.0));
+        let (mut through, mut mirrored) = (0, 0);
+        for seed in 0..200 {
+            let Echo::Range(r) = echo(&m, &o, None, [0.0, 0.0], 30.0, seed) else {
+                panic!()
+            };
+            let c = 30f64.to_radians().cos();
+            if (r - 6.0 / c).abs() < 1e-4 {
+                through += 1; // on to x = 6
+            } else if (r - (2.0 / c + 5.0 / c)).abs() < 1e-4 {
+                mirrored += 1; // back to x = -3
+            } else {
+                panic!("{r}");
+            }
+        }
+        assert!(
+            through > 70 && mirrored > 70,
+            "{through} through, {mirrored} mirrored"
+        );
+    }
+
+    #[test]
+    fn bounces_are_bounded() {
+        // Two parallel mirrors: the pulse would bounce forever.
+        let m = map(r#"
+name = "hall of mirrors"
+[start]
+x = 0
+y = 0
+[[wall]]
+material = "metal"
+points = [[-1, -50], [-1, 50]]
+[[wall]]
+material = "metal"
+points = [[1, -50], [1, 50]]
+"#);
+        let e = echo(&m, &Optics::default(), None, [0.0, 0.0], 10.0, 1);
+        assert_eq!(e, Echo::Lost);
+    }
+}
