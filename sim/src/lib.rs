@@ -28,3 +28,4 @@ pub use sim_robot::{GroundTruth, SimError, SimRobot};
 pub use twin::Twin;
 pub mod output;
 pub mod run;
+pub mod sonar;

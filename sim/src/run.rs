@@ -1,10 +1,11 @@
 //! The `twin run` job: a scenario's script, driven through the hardware contract by the robot
 //! crate's tour, with the twin's ground truth recorded beside every scan.
 
+use crate::config::scenario::SonarSettings;
 use crate::config::{ConfigError, Scenario};
 use crate::sim_robot::{GroundTruth, SimError, SimRobot};
 use robot::control::{TourConfig, TourError, TourEvent, run_tour};
-use robot::hardware::LaserScan;
+use robot::hardware::{DriveBase, DriveWait, LaserScan, SonarCommand, SonarRing};
 use robot::{Pose2, Stamp};
 use std::time::Instant;
 
@@ -17,6 +18,19 @@ pub struct ScanRecord {
     pub odometry: Pose2,
     /// The true pose of the base at the scan's stamp.
     pub truth: Pose2,
+}
+
+/// One full reading of the sonar ring, taken at rest at the end of a run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SonarRecord {
+    /// The report as the robot received it.
+    pub echoes: robot::hardware::SonarEchoes,
+    /// The true pose of the base when it was read.
+    pub truth: Pose2,
+    /// Each transducer's pose on the base, by transducer number.
+    pub transducers: Vec<Pose2>,
+    /// Full width of a transducer's cone, radians.
+    pub cone: f64,
 }
 
 /// Everything a run produced.
@@ -48,6 +62,8 @@ pub struct RunRecord {
     pub laser_mount: Pose2,
     /// State of charge of the (logic, motor) batteries at the end.
     pub battery_charge: (f64, f64),
+    /// The sonar ring's last reading, when the scenario fires it.
+    pub sonar: Option<SonarRecord>,
 }
 
 impl RunRecord {
@@ -116,6 +132,13 @@ pub fn run_scenario(
         scenario.seed = seed;
     }
     let mut robot = SimRobot::from_scenario(&scenario)?;
+    let tour_error = |source| RunError::Tour {
+        scenario: scenario.name.clone(),
+        source,
+    };
+    if let Some(sonar) = &scenario.sonar {
+        start_sonar(&mut robot, sonar).map_err(|e| tour_error(hardware_error(e)))?;
+    }
     let mut kept = Vec::new();
     let report = {
         let mut observer = |event: TourEvent<'_>| match event {
@@ -130,10 +153,13 @@ pub fn run_scenario(
             options.tour.as_ref().unwrap_or(&scenario.tour),
             &mut observer,
         )
-        .map_err(|source| RunError::Tour {
-            scenario: scenario.name.clone(),
-            source,
-        })?
+        .map_err(tour_error)?
+    };
+    let sonar = match &scenario.sonar {
+        Some(settings) => {
+            Some(read_sonar_ring(&mut robot, settings).map_err(|e| tour_error(hardware_error(e)))?)
+        }
+        None => None,
     };
     progress(report.steps, report.steps);
     // Scans are delivered after they were measured: the twin has simulated past every stamp.
@@ -165,5 +191,49 @@ pub fn run_scenario(
         true_path: twin.true_path().collect(),
         laser_mount: twin.laser().mount(),
         battery_charge: twin.battery_charge(),
+        sonar,
     })
+}
+
+/// `S`, `s2 Te Tr`, `s1`: the ring starts firing.
+fn start_sonar(robot: &mut SimRobot, settings: &SonarSettings) -> Result<(), SimError> {
+    robot.sonar(SonarCommand::Sequence(settings.sequence.clone()))?;
+    robot.sonar(SonarCommand::Timing {
+        echo_ms: settings.echo_ms,
+        relax_ms: settings.relax_ms,
+    })?;
+    robot.sonar(SonarCommand::Firing(true))
+}
+
+/// Waits, at rest, one full firing cycle and reads the ring.
+fn read_sonar_ring(
+    robot: &mut SimRobot,
+    settings: &SonarSettings,
+) -> Result<SonarRecord, SimError> {
+    // Each shot takes the fire tick, the echo window, the relax time and the step to the next.
+    let cycle = settings.sequence.len() as u32
+        * (u32::from(settings.echo_ms) + u32::from(settings.relax_ms) + 3);
+    robot.wait_drive(DriveWait::sleep(cycle.min(u32::from(u16::MAX)) as u16))?;
+    let echoes = robot.sonar_echoes()?;
+    let model = robot
+        .twin()
+        .sonar()
+        .expect("the scenario checked the robot has a ring");
+    Ok(SonarRecord {
+        truth: robot.true_pose(),
+        transducers: (0..model.len())
+            .filter_map(|k| model.transducer(k))
+            .collect(),
+        cone: model.cone(),
+        echoes,
+    })
+}
+
+/// A hardware error before or after the script, reported as the tour's.
+fn hardware_error(source: SimError) -> TourError<SimError> {
+    TourError::Hardware {
+        index: 0,
+        step: "(sonar)".into(),
+        source,
+    }
 }

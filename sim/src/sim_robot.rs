@@ -19,11 +19,11 @@ use crate::twin::{TICK, Twin};
 use core::time::Duration;
 use robot::hardware::{
     ArgumentError, Batteries, BatteryVoltages, DriveBase, DriveCommand, DriveStatus, DriveWait,
-    ErrorKind, Hardware, HardwareError, Laser, LaserScan,
+    ErrorKind, Hardware, HardwareError, Laser, LaserScan, SonarCommand, SonarEchoes, SonarRing,
 };
 use robot::protocol::base::{
-    BATTERY_REQUEST, ReplyError, STATUS_REQUEST, encode_command, encode_wait, parse_ack,
-    parse_battery, parse_status,
+    BATTERY_REQUEST, ReplyError, SONAR_REQUEST, STATUS_REQUEST, encode_command, encode_sonar,
+    encode_wait, parse_ack, parse_battery, parse_sonar_report, parse_status,
 };
 use robot::protocol::serial_time;
 use robot::{Pose2, Stamp};
@@ -76,6 +76,9 @@ pub enum SimError {
     /// The firmware answered something the protocol does not allow.
     #[error(transparent)]
     Reply(#[from] ReplyError),
+    /// The simulated robot does not have this device.
+    #[error("this robot has no {0}")]
+    Unsupported(&'static str),
 }
 
 impl HardwareError for SimError {
@@ -84,6 +87,7 @@ impl HardwareError for SimError {
             SimError::Argument(_) => ErrorKind::InvalidArgument,
             SimError::Timeout { .. } => ErrorKind::Timeout,
             SimError::Reply(_) => ErrorKind::Protocol,
+            SimError::Unsupported(_) => ErrorKind::Unsupported,
         }
     }
 }
@@ -97,6 +101,8 @@ pub struct SimRobot {
     base_baud: u32,
     /// Bytes received from the base, with their arrival times.
     rx: VecDeque<(Stamp, u8)>,
+    /// The sonar firing sequence last set (`S`), the firmware's default at power-on.
+    sonar_sequence: Vec<u8>,
 }
 
 impl SimRobot {
@@ -108,6 +114,7 @@ impl SimRobot {
             host: Stamp::ZERO,
             base_baud,
             rx: VecDeque::new(),
+            sonar_sequence: (0..16).collect(),
         };
         let greeting_done = robot.read_line("(power-on greeting)", Stamp::from_millis(500));
         debug_assert!(greeting_done.is_ok(), "the firmware greets at power-on");
@@ -280,6 +287,43 @@ impl SimRobot {
             }
             self.twin.step();
         }
+    }
+}
+
+impl SonarRing for SimRobot {
+    fn sonar(&mut self, command: SonarCommand) -> Result<(), SimError> {
+        if self.twin.sonar().is_none() {
+            return Err(SimError::Unsupported("sonar ring"));
+        }
+        let (line, letter) = encode_sonar(&command)?;
+        let (_, reply) = self.transact(&line, Duration::ZERO)?;
+        parse_ack(&reply, letter)?;
+        if let SonarCommand::Sequence(sequence) = command {
+            self.sonar_sequence = sequence;
+        }
+        Ok(())
+    }
+
+    fn sonar_echoes(&mut self) -> Result<SonarEchoes, SimError> {
+        if self.twin.sonar().is_none() {
+            return Err(SimError::Unsupported("sonar ring"));
+        }
+        let count = self.sonar_sequence.len();
+        let (written, first) = self.transact(SONAR_REQUEST, Duration::ZERO)?;
+        let mut lines = vec![first];
+        let deadline = self.host + REPLY_MARGIN;
+        while lines.len() < count {
+            lines.push(self.read_line("s", deadline)?.1);
+        }
+        let refs: Vec<&str> = lines.iter().map(String::as_str).collect();
+        let times = parse_sonar_report(&refs, count)?;
+        let measured = self.twin.sonar_measured();
+        Ok(SonarEchoes {
+            stamp: written,
+            sequence: self.sonar_sequence.clone(),
+            times,
+            measured: (0..count).map(|i| measured[i]).collect(),
+        })
     }
 }
 

@@ -32,7 +32,10 @@ pub use laser::LaserScan;
 pub use pan_tilt::{
     PAN_MAX, PanTiltCommand, PanTiltPosition, PanTiltStatus, PanTiltWait, TILT_MAX,
 };
-pub use sonar::{SONAR_COUNT, SONAR_NO_ECHO, SONAR_TIME_UNIT_S, SonarCommand, SonarEchoes};
+pub use sonar::{
+    SONAR_COUNT, SONAR_NO_ECHO, SONAR_TIME_UNIT_S, SPEED_OF_SOUND, SonarCommand, SonarEchoes,
+    echo_distance_m, echo_units,
+};
 
 use core::time::Duration;
 

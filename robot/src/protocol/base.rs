@@ -5,11 +5,16 @@
 //! says `c`), `l` writes each counter as `turns.hundredths` with two decimals, and `w` only
 //! honours its flags when all three are sent.
 
-use crate::hardware::{ArgumentError, BatteryVoltages, DriveCommand, DriveStatus, DriveWait, Ramp};
+use crate::hardware::{
+    ArgumentError, BatteryVoltages, DriveCommand, DriveStatus, DriveWait, Ramp, SonarCommand,
+};
 use crate::time::Stamp;
 
 /// The status request.
 pub const STATUS_REQUEST: &str = "l\n";
+
+/// The sonar report request.
+pub const SONAR_REQUEST: &str = "s\n";
 
 /// The battery request.
 pub const BATTERY_REQUEST: &str = "t\n";
@@ -120,6 +125,63 @@ pub fn encode_wait(wait: &DriveWait) -> String {
     } else {
         format!("w{}\n", wait.max_ms)
     }
+}
+
+/// The wire form of a sonar command and the letter that acknowledges it.
+///
+/// ```
+/// use robot::hardware::SonarCommand;
+/// use robot::protocol::base::encode_sonar;
+/// assert_eq!(encode_sonar(&SonarCommand::Sequence(vec![15, 0, 1])).unwrap(), ("S15 0 1\n".to_string(), 'S'));
+/// assert_eq!(encode_sonar(&SonarCommand::Firing(true)).unwrap(), ("s1\n".to_string(), 's'));
+/// assert_eq!(encode_sonar(&SonarCommand::Timing { echo_ms: 50, relax_ms: 20 }).unwrap().0, "s2 50 20\n");
+/// ```
+pub fn encode_sonar(command: &SonarCommand) -> Result<(String, char), ArgumentError> {
+    command.validate()?;
+    Ok(match command {
+        SonarCommand::Sequence(seq) => {
+            let list: Vec<String> = seq.iter().map(u8::to_string).collect();
+            (format!("S{}\n", list.join(" ")), 'S')
+        }
+        SonarCommand::Firing(on) => (format!("s{}\n", u8::from(*on)), 's'),
+        SonarCommand::Timing { echo_ms, relax_ms } => (format!("s2 {echo_ms} {relax_ms}\n"), 's'),
+    })
+}
+
+/// Parses the sonar report: as `sonar_report` writes it, `s` then one echo time per line for
+/// each of the `count` positions of the firing sequence (the prose shows them on one line; the
+/// code prints a newline after each).
+///
+/// ```
+/// use robot::protocol::base::parse_sonar_report;
+/// assert_eq!(parse_sonar_report(&["s1634\n", "1779\n", "65535\n"], 3).unwrap(), vec![1634, 1779, 65535]);
+/// assert!(parse_sonar_report(&["s1634\n"], 3).is_err());
+/// ```
+pub fn parse_sonar_report(lines: &[&str], count: usize) -> Result<Vec<u16>, ReplyError> {
+    let bad = |expected, got: &str| ReplyError {
+        command: 's',
+        expected,
+        got: got.trim_end().to_string(),
+    };
+    if lines.len() != count {
+        return Err(bad("one line per sonar of the sequence", &lines.concat()));
+    }
+    lines
+        .iter()
+        .enumerate()
+        .map(|(i, line)| {
+            let body = line
+                .strip_suffix('\n')
+                .ok_or_else(|| bad("lines ending in a newline", line))?;
+            let body = if i == 0 {
+                body.strip_prefix('s')
+                    .ok_or_else(|| bad("`s` before the first echo time", line))?
+            } else {
+                body
+            };
+            parse_digits(body).ok_or_else(|| bad("echo times 0..=65535", line))
+        })
+        .collect()
 }
 
 /// Checks a one-letter acknowledgement (`a\n` answers `a`, and so on).

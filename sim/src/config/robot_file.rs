@@ -6,7 +6,7 @@
 //! base of the thesis). Each names its sources.
 
 use super::error::{ConfigError, Source};
-use super::values::{Finite, NonNegative, Positive, UnitInterval};
+use super::values::{Angle, Finite, NonNegative, Positive, UnitInterval};
 use robot::{DriveGeometry, Pose2};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -30,6 +30,8 @@ pub struct RobotDescription {
     pub laser: LaserDescription,
     /// The batteries.
     pub battery: BatteryDescription,
+    /// The sonar ring, if the robot has one.
+    pub sonar: Option<SonarDescription>,
     /// The file it was read from.
     pub path: PathBuf,
 }
@@ -107,6 +109,31 @@ pub struct LaserDescription {
     pub telegram_bytes: u32,
 }
 
+/// A ring of ultrasonic transducers fired by the base microcontroller.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SonarDescription {
+    /// Transducers, evenly spaced counter-clockwise from the front (at most 16).
+    pub count: u8,
+    /// Radius of the circle they sit on, metres.
+    pub ring_radius_m: Positive,
+    /// Centre of that circle ahead of the wheel axle, metres.
+    #[serde(default = "zero")]
+    pub center_x_m: Finite,
+    /// Full width of a transducer's cone, degrees.
+    pub cone_deg: Positive,
+    /// Rays sampling the cone.
+    pub rays: u8,
+    /// Nearest echo heard (blanking), metres.
+    pub min_range_m: Positive,
+    /// Farthest echo heard, metres.
+    pub max_range_m: Positive,
+    /// Incidence beyond which a smooth surface reflects the burst away, degrees.
+    pub critical_deg: Angle,
+    /// Standard deviation of the range noise, metres.
+    pub sigma_m: NonNegative,
+}
+
 /// The two battery pairs.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -175,6 +202,20 @@ impl RobotDescription {
                 return Err(invalid(field, "expected a bit rate above 0".into()));
             }
         }
+        if let Some(sonar) = &file.sonar {
+            if !(1..=16).contains(&sonar.count) {
+                return Err(invalid(
+                    "sonar.count",
+                    format!("expected 1..=16 transducers, found {}", sonar.count),
+                ));
+            }
+            if sonar.min_range_m.get() >= sonar.max_range_m.get() {
+                return Err(invalid(
+                    "sonar.min_range_m",
+                    "must be below sonar.max_range_m".into(),
+                ));
+            }
+        }
         if file.motor.no_load_current_a.get() >= file.motor.stall_current_a.get() {
             return Err(invalid(
                 "motor.no_load_current_a",
@@ -190,6 +231,7 @@ impl RobotDescription {
             body: file.body,
             laser: file.laser,
             battery: file.battery,
+            sonar: file.sonar,
             path: source.path.clone(),
         })
     }
@@ -227,6 +269,7 @@ struct RobotFile {
     body: BodyDescription,
     laser: LaserDescription,
     battery: BatteryDescription,
+    sonar: Option<SonarDescription>,
 }
 
 #[cfg(test)]

@@ -19,6 +19,12 @@
 //! repeat = 2                            # run the steps this many times
 //! steps = ["k5 30 50", "move 0.5", "turn 25", "a535", "pause 1"]
 //!
+//! [sonar]                               # optional: fire the sonar ring during the run
+//! fire = true                           # `s1` before the script; one ring reading at the end
+//! sequence = [0, 1, 2, 3]               # `S`: firing order (default all 16, 0 first)
+//! echo_ms = 50                          # `s2 Te Tr`: echo window and relax time
+//! relax_ms = 20
+//!
 //! [tour]                                # optional; how the controller paces itself
 //! pacing = "stop-and-go"                # or "polling" (see robot::control::tour)
 //! settle_s = 0.1                        # stop-and-go: wait after the motors stop
@@ -77,6 +83,17 @@ impl NoiseSettings {
     }
 }
 
+/// How a scenario fires the sonar ring.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SonarSettings {
+    /// The firing sequence (`S`).
+    pub sequence: Vec<u8>,
+    /// Echo window after each shot, ms (`s2 Te`).
+    pub echo_ms: u16,
+    /// Pause before the next shot, ms (`s2 Tr`).
+    pub relax_ms: u16,
+}
+
 /// A validated scenario with its world and robot loaded.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scenario {
@@ -96,6 +113,8 @@ pub struct Scenario {
     pub steps: Vec<Step>,
     /// How the controller paces the script.
     pub tour: TourConfig,
+    /// Whether and how the sonar ring fires.
+    pub sonar: Option<SonarSettings>,
     /// The file it was read from.
     pub path: PathBuf,
 }
@@ -156,6 +175,35 @@ impl Scenario {
                 }
             };
         }
+        let sonar = match &file.sonar {
+            Some(f) if f.fire => {
+                if robot.sonar.is_none() {
+                    return Err(source.error_in_file(
+                        Some("sonar.fire".into()),
+                        format!("the robot `{}` has no sonar ring", robot.name),
+                    ));
+                }
+                let settings = SonarSettings {
+                    sequence: f.sequence.clone().unwrap_or_else(|| (0..16).collect()),
+                    echo_ms: f.echo_ms.unwrap_or(50),
+                    relax_ms: f.relax_ms.unwrap_or(20),
+                };
+                let check = [
+                    robot::hardware::SonarCommand::Sequence(settings.sequence.clone()),
+                    robot::hardware::SonarCommand::Timing {
+                        echo_ms: settings.echo_ms,
+                        relax_ms: settings.relax_ms,
+                    },
+                ];
+                for command in check {
+                    command
+                        .validate()
+                        .map_err(|e| source.error_in_file(Some("sonar".into()), e.to_string()))?;
+                }
+                Some(settings)
+            }
+            _ => None,
+        };
         Ok(Scenario {
             name: file.name,
             description: file.description,
@@ -165,6 +213,7 @@ impl Scenario {
             noise,
             steps,
             tour,
+            sonar,
             path: source.path.clone(),
         })
     }
@@ -203,6 +252,16 @@ struct ScenarioFile {
     noise: Option<NoiseFile>,
     script: ScriptFile,
     tour: Option<TourFile>,
+    sonar: Option<SonarFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SonarFile {
+    fire: bool,
+    sequence: Option<Vec<u8>>,
+    echo_ms: Option<u16>,
+    relax_ms: Option<u16>,
 }
 
 #[derive(Deserialize)]

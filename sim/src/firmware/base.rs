@@ -101,6 +101,7 @@ pub struct BaseFirmware {
     sonar_max_time_echo: u16,
     sonar_time_relax: u16,
     sonar_fired: Option<u8>,
+    sonar_stored: Option<usize>,
     // ---- command.c ----
     edo_wait: u16,
     wait_for_left_motor: bool,
@@ -167,6 +168,7 @@ impl BaseFirmware {
             sonar_max_time_echo: 50,
             sonar_time_relax: 20,
             sonar_fired: None,
+            sonar_stored: None,
             edo_wait: 0,
             wait_for_left_motor: false,
             wait_for_right_motor: false,
@@ -250,6 +252,26 @@ impl BaseFirmware {
     /// The transducer fired during the last tick, if any (the multiplexer address).
     pub fn take_sonar_fired(&mut self) -> Option<u8> {
         self.sonar_fired.take()
+    }
+
+    /// The position of the firing sequence whose reading was stored during the last tick.
+    pub fn take_sonar_stored(&mut self) -> Option<usize> {
+        self.sonar_stored.take()
+    }
+
+    /// Ticks the echo line is listened to after a shot: the `waiting_init` tick and `Te`.
+    pub fn sonar_window_ticks(&self) -> u32 {
+        u32::from(self.sonar_max_time_echo) + 1
+    }
+
+    /// The firing sequence (`S`).
+    pub fn sonar_sequence(&self) -> &[u8] {
+        &self.sonar_sec[..self.sonar_num]
+    }
+
+    /// Whether the sonar ring is firing (`sonar_edo`).
+    pub fn sonar_firing(&self) -> bool {
+        self.sonar_edo
     }
 
     /// The echo interrupt (`ISR_SonarEcho`): the echo line rose `units` timer counts
@@ -720,6 +742,7 @@ impl BaseFirmware {
             if self.sonar_waiting_echo == 0 {
                 let time = self.sonar_time_end.wrapping_sub(self.sonar_time_start);
                 self.sonar[self.sonar_index] = if time != 0 { time } else { u16::MAX };
+                self.sonar_stored = Some(self.sonar_index);
                 self.sonar_waiting_relax = self.sonar_time_relax;
             }
         } else if self.sonar_waiting_relax != 0 {

@@ -235,11 +235,19 @@ closed = true
 
     #[test]
     fn matte_returns_until_grazing() {
-        for (incidence, returns) in [(0.0, true), (80.0, true), (84.0, true), (86.0, false), (89.0, false)] {
+        for (incidence, returns) in [
+            (0.0, true),
+            (80.0, true),
+            (84.0, true),
+            (86.0, false),
+            (89.0, false),
+        ] {
             let e = at_incidence("matte", incidence, 1);
             assert_eq!(matches!(e, Echo::Range(_)), returns, "{incidence}°: {e:?}");
         }
-        let Echo::Range(r) = at_incidence("matte", 60.0, 1) else { panic!() };
+        let Echo::Range(r) = at_incidence("matte", 60.0, 1) else {
+            panic!()
+        };
         assert!((r - 2.0).abs() < 1e-5, "1 m / cos 60° = 2 m, got {r}");
     }
 

@@ -6,11 +6,13 @@
 //! bytes.
 
 mod scans;
+mod sonar;
 mod summary;
 mod svg;
 mod tum;
 
 pub use scans::{ScanLine, write_scans};
+pub use sonar::write_sonar;
 pub use summary::Summary;
 pub use svg::write_map_svg;
 pub use tum::write_tum;
@@ -48,6 +50,9 @@ pub fn write_all(record: &RunRecord, scenario: &Scenario, dir: &Path) -> std::io
     write_scans(&file("scans.jsonl"), &record.scans, record.laser_mount)?;
     Summary::of(record, (&scenario.world.name, &scenario.robot.name))
         .write(&file("summary.json"))?;
+    if let Some(sonar) = &record.sonar {
+        write_sonar(&file("sonar.json"), sonar)?;
+    }
     write_map_svg(&file("map.svg"), record, &scenario.world)?;
     Ok(Written {
         dir: dir.to_path_buf(),

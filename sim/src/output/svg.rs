@@ -133,6 +133,11 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
         );
     }
 
+    // The sonar ring's last reading: a wedge per transducer out to its echo.
+    if let Some(sonar) = &record.sonar {
+        draw_sonar(&mut s, &f, sonar);
+    }
+
     // Paths.
     let step = record.true_path.len().div_ceil(8000).max(1);
     let truth: Vec<Pose2> = record
@@ -232,4 +237,45 @@ fn xml_escape(text: &str) -> String {
     text.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
+}
+
+/// One wedge per transducer, from the transducer out to its echo; a dashed ray for no echo.
+fn draw_sonar(s: &mut String, f: &Frame, sonar: &crate::run::SonarRecord) {
+    use robot::hardware::{SPEED_OF_SOUND, echo_distance_m};
+    let e = &sonar.echoes;
+    for (i, &k) in e.sequence.iter().enumerate() {
+        let Some(mount) = sonar.transducers.get(usize::from(k)) else {
+            continue;
+        };
+        let at = sonar.truth.compose(mount);
+        match echo_distance_m(e.times[i], SPEED_OF_SOUND) {
+            Some(d) => {
+                let half = sonar.cone / 2.0;
+                let (x1, y1) = at.transform_point(d * half.cos(), -d * half.sin());
+                let (x2, y2) = at.transform_point(d * half.cos(), d * half.sin());
+                let r = d * SCALE;
+                let _ = writeln!(
+                    s,
+                    r##"<path d="M{:.1} {:.1}L{:.1} {:.1}A{r:.1} {r:.1} 0 0 0 {:.1} {:.1}Z" fill="#9b59b6" fill-opacity="0.18" stroke="#7d3c98" stroke-width="1.2"><title>sonar {k}: {d:.2} m</title></path>"##,
+                    f.x(at.x),
+                    f.y(at.y),
+                    f.x(x1),
+                    f.y(y1),
+                    f.x(x2),
+                    f.y(y2)
+                );
+            }
+            None => {
+                let (x, y) = at.transform_point(0.6, 0.0);
+                let _ = writeln!(
+                    s,
+                    r##"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="#7d3c98" stroke-width="1.2" stroke-dasharray="3 3"><title>sonar {k}: no echo</title></line>"##,
+                    f.x(at.x),
+                    f.y(at.y),
+                    f.x(x),
+                    f.y(y)
+                );
+            }
+        }
+    }
 }

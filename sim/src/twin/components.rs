@@ -6,6 +6,7 @@ use crate::firmware::BaseBoard;
 use crate::laser::LaserModel;
 use crate::motor::Motor;
 use crate::rng::SimRng;
+use crate::sonar::SonarModel;
 use crate::world_map::WorldMap;
 use bevy_ecs::prelude::*;
 use core::time::Duration;
@@ -148,4 +149,17 @@ pub struct Lidar {
     pub next_index: u64,
     /// Scans measured and not yet taken by the host.
     pub outbox: VecDeque<PendingScan>,
+}
+
+/// A robot's sonar ring: the acoustic model and when each reading was measured.
+#[derive(Component)]
+pub struct Sonars {
+    /// What each transducer hears.
+    pub model: SonarModel,
+    /// Seed of the ring's random stream.
+    pub stream_seed: u64,
+    /// Shots fired since power-on (numbers each shot's substream).
+    pub shots: u64,
+    /// When the reading of each position of the firing sequence was stored.
+    pub measured: [Option<Stamp>; 16],
 }

@@ -21,6 +21,7 @@ use crate::laser::LaserModel;
 use crate::laser::beam::Disc;
 use crate::motor::{Motor, MotorParams};
 use crate::rng;
+use crate::sonar::SonarModel;
 use crate::world_map::WorldMap;
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, SingleThreadedExecutor};
@@ -165,6 +166,14 @@ impl Twin {
                 },
             ))
             .id();
+        if let Some(sonar) = &robot_desc.sonar {
+            world.entity_mut(robot).insert(Sonars {
+                model: SonarModel::new(sonar),
+                stream_seed: rng::stream_seed(seed, "sonar"),
+                shots: 0,
+                measured: [None; 16],
+            });
+        }
 
         let mut schedule = Schedule::default();
         schedule.set_executor(SingleThreadedExecutor::new());
@@ -320,6 +329,18 @@ impl Twin {
     pub fn encoder_edges(&self) -> (u64, u64) {
         let d = self.component::<Drivetrain>();
         (d.left.total_edges(), d.right.total_edges())
+    }
+
+    /// The sonar ring's model, if the robot has one.
+    pub fn sonar(&self) -> Option<&SonarModel> {
+        self.world.get::<Sonars>(self.robot).map(|s| &s.model)
+    }
+
+    /// When each position of the sonar firing sequence was last measured.
+    pub fn sonar_measured(&self) -> [Option<Stamp>; 16] {
+        self.world
+            .get::<Sonars>(self.robot)
+            .map_or([None; 16], |s| s.measured)
     }
 
     /// State of charge of the (logic, motor) battery pairs.

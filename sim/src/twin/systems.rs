@@ -22,13 +22,21 @@ pub fn advance_clock(mut clock: ResMut<SimClock>) {
     clock.now += STEP;
 }
 
-/// Runs each robot's motors and base microcontroller through the step's ticks.
+/// Runs each robot's motors and base microcontroller through the step's ticks, and answers the
+/// sonar shots the firmware fires.
 pub fn run_drive_electronics(
     clock: Res<SimClock>,
-    mut robots: Query<(&mut Board, &mut Drivetrain, &mut Power)>,
+    map: Res<Map>,
+    mut robots: Query<(
+        &mut Board,
+        &mut Drivetrain,
+        &mut Power,
+        &Trajectory,
+        Option<&mut Sonars>,
+    )>,
 ) {
     let dt = TICK.as_secs_f64();
-    for (mut board, mut drive, mut power) in &mut robots {
+    for (mut board, mut drive, mut power, path, mut sonars) in &mut robots {
         let drive = &mut *drive;
         let mut tick_time = clock.step_start;
         for _ in 0..TICKS_PER_STEP {
@@ -45,6 +53,38 @@ pub fn run_drive_electronics(
             board
                 .0
                 .tick(tick_time, adc, || (l.take_edges(), r.take_edges()));
+            if let Some(sonars) = sonars.as_deref_mut() {
+                listen_for_echoes(&mut board.0, sonars, &map.0, path.current.1, tick_time);
+            }
+        }
+    }
+}
+
+/// Answers a shot fired during this tick with its echo, if it comes back within the echo window,
+/// and notes when a reading is stored.
+fn listen_for_echoes(
+    board: &mut crate::firmware::BaseBoard,
+    sonars: &mut Sonars,
+    map: &crate::world_map::WorldMap,
+    base: robot::Pose2,
+    now: robot::Stamp,
+) {
+    let fw = board.firmware_mut();
+    if let Some(k) = fw.take_sonar_fired() {
+        let mut rng = crate::rng::substream(sonars.stream_seed, sonars.shots);
+        sonars.shots += 1;
+        if let Some(distance) = sonars.model.echo(map, base, usize::from(k), &mut rng) {
+            let units = robot::hardware::echo_units(distance, robot::hardware::SPEED_OF_SOUND);
+            let window_units = f64::from(fw.sonar_window_ticks()) * TICK.as_secs_f64()
+                / robot::hardware::SONAR_TIME_UNIT_S;
+            if f64::from(units) < window_units {
+                fw.sonar_echo(units);
+            }
+        }
+    }
+    if let Some(position) = fw.take_sonar_stored() {
+        if let Some(slot) = sonars.measured.get_mut(position) {
+            *slot = Some(now);
         }
     }
 }
