@@ -223,15 +223,6 @@ mod tests {
         echo(&m, &Optics::default(), None, [4.0, 0.0], incidence, seed)
     }
 
-    const ROOM: &str = r#"
-name = "room"
-[start]
-x = 0
-y = 0
-[[wall]]
-points = [[-5, -5], [5, -5], [5, 5], [-5, 5]]
-closed = true
-"#;
 
     #[test]
     fn matte_returns_until_grazing() {

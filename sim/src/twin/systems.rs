@@ -82,10 +82,8 @@ fn listen_for_echoes(
             }
         }
     }
-    if let Some(position) = fw.take_sonar_stored() {
-        if let Some(slot) = sonars.measured.get_mut(position) {
-            *slot = Some(now);
-        }
+    if let Some(slot) = fw.take_sonar_stored().and_then(|p| sonars.measured.get_mut(p)) {
+        *slot = Some(now);
     }
 }
 
