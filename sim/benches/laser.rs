@@ -42,7 +42,13 @@ fn scans(c: &mut Criterion) {
     group.bench_function("lab.toml scan, 361 beams, noise", |b| {
         b.iter(|| {
             k = (k + 1) % poses.len();
-            black_box(laser.scan(&map, None, poses[k], Stamp(k as u64), &mut rng))
+            black_box(laser.scan(
+                &map,
+                None,
+                laser.frame_on(poses[k]),
+                Stamp(k as u64),
+                &mut rng,
+            ))
         })
     });
     group.finish();

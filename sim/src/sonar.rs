@@ -31,6 +31,7 @@ pub struct SonarModel {
     max_range: f64,
     critical: f64,
     sigma: f64,
+    height: f64,
 }
 
 impl SonarModel {
@@ -63,6 +64,7 @@ impl SonarModel {
             max_range: desc.max_range_m.get(),
             critical: desc.critical_deg.get().to_radians(),
             sigma: desc.sigma_m.get(),
+            height: desc.height_m.get(),
         }
     }
 
@@ -113,9 +115,9 @@ impl SonarModel {
         let (mut o, mut d) = (origin, dir);
         let mut travelled = 0.0;
         for _ in 0..=MAX_BOUNCES {
-            let hit = map.cast(o, d, self.max_range - travelled)?;
+            let hit = map.cast_level(o, self.height, d, self.max_range - travelled)?;
             travelled += hit.distance;
-            let n = hit.normal;
+            let n = [hit.normal[0], hit.normal[1]];
             let cos_incidence = -(d[0] * n[0] + d[1] * n[1]);
             if cos_incidence.clamp(-1.0, 1.0).acos() <= self.critical {
                 return (travelled >= self.min_range).then_some(travelled);
@@ -147,6 +149,7 @@ mod tests {
             max_range_m: Positive(12.19),
             critical_deg: Angle(25.0),
             sigma_m: NonNegative(0.0),
+            height_m: Positive(0.2),
         })
     }
 

@@ -79,6 +79,9 @@ pub struct BodyDescription {
     /// Position of the footprint's centre ahead of the wheel axle, metres.
     #[serde(default = "zero")]
     pub center_x_m: Finite,
+    /// Height of the robot's top, metres: it passes under what is higher, and reflected laser
+    /// pulses meet it below that.
+    pub height_m: Positive,
 }
 
 /// The laser rangefinder and where it sits on the base.
@@ -93,6 +96,8 @@ pub struct LaserDescription {
     /// Mount heading, degrees counter-clockwise.
     #[serde(default = "zero")]
     pub yaw_deg: Finite,
+    /// Height of the scan plane above the floor, metres.
+    pub z_m: Positive,
     /// Number of beams.
     pub beams: u16,
     /// Field of view from first to last beam, degrees.
@@ -132,6 +137,8 @@ pub struct SonarDescription {
     pub critical_deg: Angle,
     /// Standard deviation of the range noise, metres.
     pub sigma_m: NonNegative,
+    /// Height of the transducers above the floor, metres.
+    pub height_m: Positive,
 }
 
 /// The two battery pairs.

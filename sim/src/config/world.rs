@@ -1,7 +1,9 @@
-//! World files: walls and boxes made of named materials, and the robot's start pose.
+//! World files: walls, boxes and tables made of named materials, with heights, under a ceiling;
+//! and the robot's start pose.
 //!
 //! ```toml
 //! name = "two rooms"
+//! ceiling_m = 2.6              # the floor is z = 0; the ceiling (default 2.6 m) closes the room
 //! [start]                      # where the robot is put, metres and degrees
 //! x = 1.0
 //! y = 1.0
@@ -11,11 +13,19 @@
 //! material = "matte"           # matte (default), black, glass or metal
 //! points = [[0, 0], [6, 0], [6, 4], [0, 4]]
 //! closed = true
+//! z = [0.0, 2.6]               # optional: from floor to ceiling by default
 //!
 //! [[box]]                      # a rectangle: centre, size along its own x and y, heading
 //! center = [3.0, 2.0]
 //! size = [1.2, 0.6]
 //! heading_deg = 30
+//! material = "black"
+//! z = [0.0, 0.5]               # optional: a box half a metre tall
+//!
+//! [[table]]                    # a top (0.72 to 0.75 m by default) on four square legs
+//! center = [5.0, 1.0]
+//! size = [1.6, 0.8]
+//! height_m = 0.75              # optional
 //! material = "black"
 //!
 //! [optics]                     # optional: how the materials answer the laser (defaults shown)
@@ -88,6 +98,8 @@ pub struct Wall {
     pub points: Vec<[f64; 2]>,
     /// Whether the last point joins the first.
     pub closed: bool,
+    /// Bottom and top, metres above the floor.
+    pub z: [f64; 2],
 }
 
 impl Wall {
@@ -108,8 +120,10 @@ pub struct WorldDescription {
     pub description: String,
     /// Where the robot starts.
     pub start: Pose2,
-    /// Every surface, boxes included (as closed walls).
+    /// Every surface, boxes and tables included (as closed walls).
     pub walls: Vec<Wall>,
+    /// Height of the ceiling, metres (the floor is at zero).
+    pub ceiling: f64,
     /// How the materials answer the laser.
     pub optics: Optics,
     /// The file it was read from.
@@ -140,6 +154,29 @@ impl WorldDescription {
         {
             return Err(source.error_in_file(Some("start".into()), "the start pose must be finite"));
         }
+        let ceiling = *file.ceiling_m.get_ref();
+        if !(ceiling > 0.0 && ceiling.is_finite()) {
+            return Err(source.error(
+                file.ceiling_m.span(),
+                Some("ceiling_m".into()),
+                format!("expected a positive height, found {ceiling}"),
+            ));
+        }
+        let heights = |z: &Option<Spanned<[f64; 2]>>, field: Option<String>| match z {
+            None => Ok([0.0, ceiling]),
+            Some(z) => {
+                let [lo, hi] = *z.get_ref();
+                if lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo < hi && hi <= ceiling {
+                    Ok([lo, hi])
+                } else {
+                    Err(source.error(
+                        z.span(),
+                        field,
+                        format!("expected [bottom, top] with 0 <= bottom < top <= ceiling ({ceiling}), found [{lo}, {hi}]"),
+                    ))
+                }
+            }
+        };
         let mut walls = Vec::new();
         for (i, wall) in file.walls.iter().enumerate() {
             let field = |name: &str| Some(format!("wall[{i}].{name}"));
@@ -158,33 +195,59 @@ impl WorldDescription {
                 material,
                 points: points.clone(),
                 closed: wall.closed,
+                z: heights(&wall.z, field("z"))?,
             });
         }
         for (i, b) in file.boxes.iter().enumerate() {
             let field = |name: &str| Some(format!("box[{i}].{name}"));
             let material = material(source, &b.material, field("material"))?;
-            let [w, h] = *b.size.get_ref();
-            if !(w > 0.0 && h > 0.0 && w.is_finite() && h.is_finite()) {
-                return Err(source.error(
-                    b.size.span(),
-                    field("size"),
-                    format!("a box needs a positive finite size, found [{w}, {h}]"),
-                ));
-            }
-            let centre = *b.center.get_ref();
-            check_finite(source, b.center.span(), &centre, field("center"))?;
-            let pose = Pose2::new(centre[0], centre[1], b.heading_deg.to_radians());
-            let corners = [(0.5, 0.5), (-0.5, 0.5), (-0.5, -0.5), (0.5, -0.5)]
-                .map(|(sx, sy)| {
-                    let (x, y) = pose.transform_point(sx * w, sy * h);
-                    [x, y]
-                })
-                .to_vec();
+            let rect = rectangle(source, &b.center, &b.size, b.heading_deg, &field)?;
             walls.push(Wall {
                 material,
-                points: corners,
+                points: rect.corners(1.0, 1.0),
                 closed: true,
+                z: heights(&b.z, field("z"))?,
             });
+        }
+        for (i, t) in file.tables.iter().enumerate() {
+            let field = |name: &str| Some(format!("table[{i}].{name}"));
+            let material = material(source, &t.material, field("material"))?;
+            let rect = rectangle(source, &t.center, &t.size, t.heading_deg, &field)?;
+            let height = *t.height_m.get_ref();
+            if !(height > TABLE_TOP && height < ceiling) {
+                return Err(source.error(
+                    t.height_m.span(),
+                    field("height_m"),
+                    format!(
+                        "expected a height between {TABLE_TOP} m and the ceiling, found {height}"
+                    ),
+                ));
+            }
+            walls.push(Wall {
+                material,
+                points: rect.corners(1.0, 1.0),
+                closed: true,
+                z: [height - TABLE_TOP, height],
+            });
+            // Four square legs inside the corners.
+            let leg = TABLE_LEG.min(rect.size[0] / 4.0).min(rect.size[1] / 4.0);
+            for (sx, sy) in [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)] {
+                let (cx, cy) = rect.pose.transform_point(
+                    sx * (rect.size[0] / 2.0 - leg / 2.0),
+                    sy * (rect.size[1] / 2.0 - leg / 2.0),
+                );
+                let leg_pose = Pose2::new(cx, cy, rect.pose.theta);
+                walls.push(Wall {
+                    material,
+                    points: Rectangle {
+                        pose: leg_pose,
+                        size: [leg, leg],
+                    }
+                    .corners(1.0, 1.0),
+                    closed: true,
+                    z: [0.0, height - TABLE_TOP],
+                });
+            }
         }
         let optics = file
             .optics
@@ -194,6 +257,7 @@ impl WorldDescription {
             description: file.description,
             start,
             walls,
+            ceiling,
             optics,
             path: source.path.clone(),
         })
@@ -218,6 +282,53 @@ impl WorldDescription {
         }
         (min, max)
     }
+}
+
+/// Thickness of a table's top, metres.
+const TABLE_TOP: f64 = 0.03;
+/// Side of a table's square legs, metres.
+const TABLE_LEG: f64 = 0.05;
+
+/// A rectangle of the world file: centre, size along its own axes, heading.
+struct Rectangle {
+    pose: Pose2,
+    size: [f64; 2],
+}
+
+impl Rectangle {
+    /// The corners, counter-clockwise, of the rectangle scaled by `sx` and `sy`.
+    fn corners(&self, sx: f64, sy: f64) -> Vec<[f64; 2]> {
+        let [w, h] = self.size;
+        [(0.5, 0.5), (-0.5, 0.5), (-0.5, -0.5), (0.5, -0.5)]
+            .map(|(a, b)| {
+                let (x, y) = self.pose.transform_point(a * w * sx, b * h * sy);
+                [x, y]
+            })
+            .to_vec()
+    }
+}
+
+fn rectangle(
+    source: &Source,
+    center: &Spanned<[f64; 2]>,
+    size: &Spanned<[f64; 2]>,
+    heading_deg: f64,
+    field: &dyn Fn(&str) -> Option<String>,
+) -> Result<Rectangle, ConfigError> {
+    let [w, h] = *size.get_ref();
+    if !(w > 0.0 && h > 0.0 && w.is_finite() && h.is_finite()) {
+        return Err(source.error(
+            size.span(),
+            field("size"),
+            format!("expected a positive finite size, found [{w}, {h}]"),
+        ));
+    }
+    let c = *center.get_ref();
+    check_finite(source, center.span(), &c, field("center"))?;
+    Ok(Rectangle {
+        pose: Pose2::new(c[0], c[1], heading_deg.to_radians()),
+        size: [w, h],
+    })
 }
 
 fn material(
@@ -265,7 +376,32 @@ struct WorldFile {
     walls: Vec<WallFile>,
     #[serde(default, rename = "box")]
     boxes: Vec<BoxFile>,
+    #[serde(default, rename = "table")]
+    tables: Vec<TableFile>,
+    #[serde(default = "default_ceiling")]
+    ceiling_m: Spanned<f64>,
     optics: Option<OpticsFile>,
+}
+
+fn default_ceiling() -> Spanned<f64> {
+    Spanned::new(0..0, 2.6)
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TableFile {
+    #[serde(default = "matte")]
+    material: Spanned<String>,
+    center: Spanned<[f64; 2]>,
+    size: Spanned<[f64; 2]>,
+    #[serde(default)]
+    heading_deg: f64,
+    #[serde(default = "table_height")]
+    height_m: Spanned<f64>,
+}
+
+fn table_height() -> Spanned<f64> {
+    Spanned::new(0..0, 0.75)
 }
 
 #[derive(Deserialize)]
@@ -315,6 +451,7 @@ struct WallFile {
     points: Spanned<Vec<[f64; 2]>>,
     #[serde(default)]
     closed: bool,
+    z: Option<Spanned<[f64; 2]>>,
 }
 
 #[derive(Deserialize)]
@@ -326,6 +463,7 @@ struct BoxFile {
     size: Spanned<[f64; 2]>,
     #[serde(default)]
     heading_deg: f64,
+    z: Option<Spanned<[f64; 2]>>,
 }
 
 fn matte() -> Spanned<String> {

@@ -62,13 +62,16 @@ impl Default for Optics {
     }
 }
 
-/// A round obstacle that moves: the robot's own body, which reflected pulses can meet.
+/// A round obstacle that moves: the robot's own body, a vertical cylinder from the floor, which
+/// reflected pulses can meet.
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct Disc {
     /// Centre, world frame, metres.
     pub center: [f64; 2],
     /// Radius, metres.
     pub radius: f64,
+    /// Height of the top, metres.
+    pub height: f64,
 }
 
 /// What the receiver gets back from one pulse.
@@ -83,7 +86,7 @@ pub enum Echo {
 /// What the pulse met next.
 struct Contact {
     distance: f64,
-    normal: [f64; 2],
+    normal: [f64; 3],
     material: Material,
 }
 
@@ -95,8 +98,8 @@ pub fn trace(
     map: &WorldMap,
     optics: &Optics,
     body: Option<Disc>,
-    origin: [f64; 2],
-    dir: [f64; 2],
+    origin: [f64; 3],
+    dir: [f64; 3],
     max_range: f64,
     rng: &mut SimRng,
 ) -> Echo {
@@ -113,15 +116,12 @@ pub fn trace(
         };
         travelled += contact.distance;
         let n = contact.normal;
-        let cos_incidence = -(d[0] * n[0] + d[1] * n[1]);
-        let incidence = cos_incidence.clamp(-1.0, 1.0).acos();
+        let along = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+        let incidence = (-along).clamp(-1.0, 1.0).acos();
         if incidence >= optics.grazing {
             return Echo::Lost;
         }
-        let hit = [
-            o[0] + d[0] * contact.distance,
-            o[1] + d[1] * contact.distance,
-        ];
+        let hit = [0, 1, 2].map(|k| o[k] + d[k] * contact.distance);
         match contact.material {
             Material::Matte => return Echo::Range(travelled),
             Material::Black => {
@@ -140,14 +140,13 @@ pub fn trace(
             Material::Glass if incidence < optics.glass_return => return Echo::Range(travelled),
             Material::Glass if rng.random_bool(optics.glass_transparent) => {
                 // Through the pane: go on from just beyond it.
-                o = [hit[0] + d[0] * NUDGE, hit[1] + d[1] * NUDGE];
+                o = [0, 1, 2].map(|k| hit[k] + d[k] * NUDGE);
             }
             Material::Metal if incidence < optics.metal_return => return Echo::Range(travelled),
             Material::Glass | Material::Metal => {
                 // Specular reflection, leaving from just in front of the surface.
-                let k = 2.0 * (d[0] * n[0] + d[1] * n[1]);
-                d = [d[0] - k * n[0], d[1] - k * n[1]];
-                o = [hit[0] + n[0] * NUDGE, hit[1] + n[1] * NUDGE];
+                d = [0, 1, 2].map(|k| d[k] - 2.0 * along * n[k]);
+                o = [0, 1, 2].map(|k| hit[k] + n[k] * NUDGE);
             }
         }
     }
@@ -160,8 +159,8 @@ const NUDGE: f64 = 1e-5;
 fn first_contact(
     map: &WorldMap,
     body: Option<Disc>,
-    origin: [f64; 2],
-    dir: [f64; 2],
+    origin: [f64; 3],
+    dir: [f64; 3],
     max: f64,
 ) -> Option<Contact> {
     let wall = map.cast(origin, dir, max).map(|hit| Contact {
@@ -170,18 +169,31 @@ fn first_contact(
         material: hit.material,
     });
     let Some(disc) = body else { return wall };
+    let horizontal = dir[0].hypot(dir[1]);
+    if horizontal < 1e-12 {
+        return wall;
+    }
     let limit = wall.as_ref().map_or(max, |w| w.distance);
     let ray = Ray::new(
         Vector::new(origin[0] as f32, origin[1] as f32),
-        Vector::new(dir[0] as f32, dir[1] as f32),
+        Vector::new((dir[0] / horizontal) as f32, (dir[1] / horizontal) as f32),
     );
     let at = Pose::from_translation(Vector::new(disc.center[0] as f32, disc.center[1] as f32));
-    match Ball::new(disc.radius as f32).cast_ray_and_get_normal(&at, &ray, limit as f32, true) {
-        Some(hit) if hit.time_of_impact > 0.0 => Some(Contact {
-            distance: f64::from(hit.time_of_impact),
-            normal: [f64::from(hit.normal.x), f64::from(hit.normal.y)],
-            material: Material::Matte,
-        }),
+    let ball = Ball::new(disc.radius as f32);
+    match ball.cast_ray_and_get_normal(&at, &ray, (limit * horizontal) as f32, true) {
+        Some(hit) if hit.time_of_impact > 0.0 => {
+            let t = f64::from(hit.time_of_impact) / horizontal;
+            let z = origin[2] + dir[2] * t;
+            if (0.0..=disc.height).contains(&z) {
+                Some(Contact {
+                    distance: t,
+                    normal: [f64::from(hit.normal.x), f64::from(hit.normal.y), 0.0],
+                    material: Material::Matte,
+                })
+            } else {
+                wall
+            }
+        }
         _ => wall,
     }
 }
@@ -208,8 +220,8 @@ mod tests {
             m,
             optics,
             body,
-            origin,
-            [a.cos(), a.sin()],
+            [origin[0], origin[1], 1.0],
+            [a.cos(), a.sin(), 0.0],
             32.0,
             &mut crate::rng::substream(seed, 0),
         )
@@ -222,7 +234,6 @@ mod tests {
         ));
         echo(&m, &Optics::default(), None, [4.0, 0.0], incidence, seed)
     }
-
 
     #[test]
     fn matte_returns_until_grazing() {
@@ -282,6 +293,7 @@ points = [[2, -3], [2, 3]]
         let body = Disc {
             center: [-0.1, 0.0],
             radius: 0.25,
+            height: 1.5,
         };
         // Head-on the pulse comes straight back to the laser, through the robot's own body:
         // mirror at 2 m, then back to the front of the body at 2 - 0.15 m.

@@ -48,10 +48,40 @@ impl LaserTiming {
     }
 }
 
+/// Where the laser is and where it looks: its optical centre in the world, the heading of its
+/// middle beam and the tilt of its scan plane (positive up).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct LaserFrame {
+    /// Optical centre, world frame, metres.
+    pub origin: [f64; 3],
+    /// Heading of the middle beam, radians counter-clockwise.
+    pub yaw: f64,
+    /// Tilt of the scan plane about the laser's left axis, radians (positive: forward beams rise).
+    pub tilt: f64,
+}
+
+impl LaserFrame {
+    /// The world direction of the beam at `angle` in the scan plane.
+    pub fn direction(&self, angle: f64) -> [f64; 3] {
+        let (sa, ca) = angle.sin_cos();
+        let (st, ct) = self.tilt.sin_cos();
+        let (sy, cy) = self.yaw.sin_cos();
+        let (x, y, z) = (ca * ct, sa, ca * st);
+        [cy * x - sy * y, sy * x + cy * y, z]
+    }
+
+    /// The world point `range` metres along the beam at `angle`.
+    pub fn point(&self, angle: f64, range: f64) -> [f64; 3] {
+        let d = self.direction(angle);
+        [0, 1, 2].map(|k| self.origin[k] + d[k] * range)
+    }
+}
+
 /// A laser model: geometry, noise and timing.
 #[derive(Clone, Debug)]
 pub struct LaserModel {
     mount: Pose2,
+    height: f64,
     angle_min: f64,
     angle_increment: f64,
     range_max_m: f64,
@@ -59,8 +89,8 @@ pub struct LaserModel {
     sigma_m: f64,
     outliers: Outliers,
     timing: LaserTiming,
-    /// Unit direction of each beam in the laser frame.
-    directions: Vec<[f64; 2]>,
+    /// Angle of each beam in the scan plane.
+    angles: Vec<f64>,
 }
 
 impl LaserModel {
@@ -71,14 +101,12 @@ impl LaserModel {
         let fov = desc.fov_deg.get().to_radians();
         let angle_min = -fov / 2.0;
         let angle_increment = fov / (beams - 1) as f64;
-        let directions = (0..beams)
-            .map(|i| {
-                let (s, c) = (angle_min + i as f64 * angle_increment).sin_cos();
-                [c, s]
-            })
+        let angles = (0..beams)
+            .map(|i| angle_min + i as f64 * angle_increment)
             .collect();
         LaserModel {
             mount,
+            height: desc.z_m.get(),
             angle_min,
             angle_increment,
             range_max_m: desc.range_max_m.get(),
@@ -90,7 +118,7 @@ impl LaserModel {
                 desc.telegram_bytes,
                 desc.baud,
             ),
-            directions,
+            angles,
         }
     }
 
@@ -109,28 +137,41 @@ impl LaserModel {
         self.range_max_m
     }
 
-    /// Measures one scan with the base at `base` (world frame). `body` is the robot's own
-    /// footprint, which reflected beams can meet.
+    /// The laser's frame when fixed on a base at `base` (world frame).
+    pub fn frame_on(&self, base: Pose2) -> LaserFrame {
+        let at = base.compose(&self.mount);
+        LaserFrame {
+            origin: [at.x, at.y, self.height],
+            yaw: at.theta,
+            tilt: 0.0,
+        }
+    }
+
+    /// Measures one scan from `frame`. `body` is the robot's own body, which reflected beams can
+    /// meet.
     pub fn scan(
         &self,
         map: &WorldMap,
         body: Option<Disc>,
-        base: Pose2,
+        frame: LaserFrame,
         stamp: Stamp,
         rng: &mut SimRng,
     ) -> LaserScan {
-        let laser = base.compose(&self.mount);
-        let (s, c) = laser.theta.sin_cos();
-        let origin = [laser.x, laser.y];
         let ranges_mm = self
-            .directions
+            .angles
             .iter()
-            .map(|d| {
-                let dir = [c * d[0] - s * d[1], s * d[0] + c * d[1]];
-                self.reading_mm(
-                    beam::trace(map, map.optics(), body, origin, dir, self.range_max_m, rng),
+            .map(|&angle| {
+                let dir = frame.direction(angle);
+                let echo = beam::trace(
+                    map,
+                    map.optics(),
+                    body,
+                    frame.origin,
+                    dir,
+                    self.range_max_m,
                     rng,
-                )
+                );
+                self.reading_mm(echo, rng)
             })
             .collect();
         LaserScan {
@@ -175,6 +216,7 @@ mod tests {
             x_m: Finite(0.0),
             y_m: Finite(0.0),
             yaw_deg: Finite(0.0),
+            z_m: Positive(0.3),
             beams: 361,
             fov_deg: Positive(180.0),
             range_max_m: Positive(32.0),
@@ -204,7 +246,13 @@ points = [[-1, -2], [40, -2]]
     fn noiseless_ranges_match_trigonometry() {
         let laser = lms(0.0);
         let mut rng = crate::rng::stream(1, "laser");
-        let scan = laser.scan(&corridor(), None, Pose2::IDENTITY, Stamp::ZERO, &mut rng);
+        let scan = laser.scan(
+            &corridor(),
+            None,
+            laser.frame_on(Pose2::IDENTITY),
+            Stamp::ZERO,
+            &mut rng,
+        );
         assert_eq!(scan.len(), 361);
         // Beam 360 points left (+90°) to the wall at y = 1 from (0.1, 0): 1 m.
         assert_eq!(scan.ranges_mm[360], 1000);
@@ -223,7 +271,13 @@ points = [[-1, -2], [40, -2]]
         let mut rng = crate::rng::stream(3, "laser");
         let mut errors = Vec::new();
         for k in 0..200 {
-            let scan = laser.scan(&corridor(), None, Pose2::IDENTITY, Stamp(k), &mut rng);
+            let scan = laser.scan(
+                &corridor(),
+                None,
+                laser.frame_on(Pose2::IDENTITY),
+                Stamp(k),
+                &mut rng,
+            );
             errors.push(f64::from(scan.ranges_mm[360]) * 1e-3 - 1.0);
             assert_eq!(scan.ranges_mm[180], 32_000, "no-return stays the maximum");
         }

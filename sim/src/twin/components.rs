@@ -87,6 +87,8 @@ pub struct Chassis {
     pub radius: f64,
     /// Centre of the footprint ahead of the axle, metres.
     pub center_x: f64,
+    /// Height of the robot, metres.
+    pub height: f64,
     /// The footprint touches a wall now.
     pub touching: bool,
     /// Times the footprint came into contact with a wall.

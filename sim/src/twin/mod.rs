@@ -76,7 +76,7 @@ impl Twin {
         };
         physics.integration_parameters.dt = STEP.as_secs_f32();
         physics.integration_parameters.num_solver_iterations = 1;
-        let (vertices, indices) = map.polyline_parts();
+        let (vertices, indices) = map.obstacles_below(robot_desc.body.height_m.get());
         if !indices.is_empty() {
             physics.insert(
                 RigidBodyBuilder::fixed(),
@@ -153,6 +153,7 @@ impl Twin {
                     collider,
                     radius,
                     center_x: robot_desc.body.center_x_m.get(),
+                    height: robot_desc.body.height_m.get(),
                     touching: false,
                     collisions: 0,
                 },
@@ -271,11 +272,13 @@ impl Twin {
         let body = Disc {
             center: [cx, cy],
             radius: chassis.radius,
+            height: chassis.height,
         };
         let mut rng = rng::substream(lidar.stream_seed, pending.index);
+        let frame = lidar.model.frame_on(pending.base);
         let scan = lidar
             .model
-            .scan(map, Some(body), pending.base, pending.stamp, &mut rng);
+            .scan(map, Some(body), frame, pending.stamp, &mut rng);
         Some((pending.delivery, scan))
     }
 

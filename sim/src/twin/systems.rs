@@ -82,7 +82,10 @@ fn listen_for_echoes(
             }
         }
     }
-    if let Some(slot) = fw.take_sonar_stored().and_then(|p| sonars.measured.get_mut(p)) {
+    if let Some(slot) = fw
+        .take_sonar_stored()
+        .and_then(|p| sonars.measured.get_mut(p))
+    {
         *slot = Some(now);
     }
 }
@@ -206,6 +209,7 @@ mod tests {
             x_m: Finite(0.0),
             y_m: Finite(0.0),
             yaw_deg: Finite(0.0),
+            z_m: Positive(0.3),
             beams: 361,
             fov_deg: Positive(180.0),
             range_max_m: Positive(32.0),
