@@ -11,7 +11,11 @@ use std::path::{Path, PathBuf};
 const DETERMINISTIC: [&str; 3] = ["truth.tum", "odometry.tum", "scans.jsonl"];
 
 fn run_into(dir: &Path, seed: Option<u64>) {
-    let scenario = scenario("lab-tour");
+    run_scenario_into("lab-tour", dir, seed);
+}
+
+fn run_scenario_into(name: &str, dir: &Path, seed: Option<u64>) {
+    let scenario = scenario(name);
     let options = RunOptions {
         seed,
         ..RunOptions::default()
@@ -40,10 +44,25 @@ fn first_difference(a: &str, b: &str) -> Option<String> {
 
 #[test]
 fn same_seed_gives_identical_bytes() {
-    let (a, b) = (temp_dir("a"), temp_dir("b"));
-    run_into(&a, None);
-    run_into(&b, None);
-    for name in DETERMINISTIC {
+    same_seed_same_bytes("lab-tour", &DETERMINISTIC);
+}
+
+#[test]
+fn same_seed_gives_identical_bytes_with_sonar_and_pan_tilt_running() {
+    same_seed_same_bytes(
+        "lab-tour-thesis",
+        &["truth.tum", "odometry.tum", "scans.jsonl", "sonar.json"],
+    );
+}
+
+fn same_seed_same_bytes(scenario: &str, files: &[&str]) {
+    let (a, b) = (
+        temp_dir(&format!("{scenario}-a")),
+        temp_dir(&format!("{scenario}-b")),
+    );
+    run_scenario_into(scenario, &a, None);
+    run_scenario_into(scenario, &b, None);
+    for &name in files {
         let x = std::fs::read_to_string(a.join(name)).unwrap();
         let y = std::fs::read_to_string(b.join(name)).unwrap();
         assert!(!x.is_empty(), "{name} is empty");

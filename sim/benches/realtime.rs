@@ -1,7 +1,10 @@
-//! Real-time factor of the default lab tour: simulated seconds per wall-clock second, on one
-//! core, for the whole run (twin, firmware, physics, laser, and the robot crate's tour driving it
-//! through the hardware contract), without writing files. Also reported: the same with the five
-//! output files written.
+//! Real-time factor of the lab tour: simulated seconds per wall-clock second, on one core, for
+//! the whole run (twin, firmware, physics, sensors, and the robot crate's tour driving it through
+//! the hardware contract), without writing files, and with the output files written.
+//!
+//! Two tours: `lab-tour` (the default: a Pioneer with a fixed laser) and `lab-tour-thesis` (the
+//! thesis's robot with everything running: the laser on the pan-tilt, homed then levelled, and
+//! the 16 sonars firing throughout).
 //!
 //! `cargo bench --bench realtime`
 
@@ -13,10 +16,18 @@ use std::time::Instant;
 const RUNS: usize = 15;
 
 fn main() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/lab-tour.toml");
+    for name in ["lab-tour", "lab-tour-thesis"] {
+        measure(name);
+    }
+}
+
+fn measure(name: &str) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../scenarios")
+        .join(format!("{name}.toml"));
     let scenario = Scenario::load(&path).unwrap_or_else(|e| panic!("{e}"));
     let options = RunOptions::default();
-    let warm = run_scenario(&scenario, &options, |_, _| {}).expect("the lab tour runs");
+    let warm = run_scenario(&scenario, &options, |_, _| {}).expect("the tour runs");
     let sim_seconds = warm.sim_seconds();
 
     let mut factors = Vec::with_capacity(RUNS);
@@ -38,28 +49,28 @@ fn main() {
     with_files.sort_by(f64::total_cmp);
     let _ = std::fs::remove_dir_all(out);
 
-    let laser = scenario.robot.laser.baud;
+    let mut running = vec![format!("laser at {} bps", scenario.robot.laser.baud)];
+    if scenario.sonar.is_some() {
+        running.push("sonar ring firing".into());
+    }
+    if scenario.pan_tilt.is_some() {
+        running.push("pan-tilt".into());
+    }
     println!(
-        "lab tour: {sim_seconds:.1} s simulated, {} scans kept, laser at {laser} bps ({:.2} Hz)",
+        "{name}: {sim_seconds:.1} s simulated, {} scans kept; {}",
         warm.scans.len(),
-        1.0 / robot_laser_period(&scenario)
+        running.join(", ")
     );
     println!(
-        "real-time factor, simulation only:  median {:.0}x  (min {:.0}x, max {:.0}x, {RUNS} runs)",
+        "  real-time factor, simulation only:   median {:.0}x  (min {:.0}x, max {:.0}x, {RUNS} runs)",
         factors[RUNS / 2],
         factors[0],
         factors[RUNS - 1]
     );
     println!(
-        "real-time factor, with output files: median {:.0}x  (min {:.0}x, max {:.0}x, {RUNS} runs)",
+        "  real-time factor, with output files: median {:.0}x  (min {:.0}x, max {:.0}x, {RUNS} runs)",
         with_files[RUNS / 2],
         with_files[0],
         with_files[RUNS - 1]
     );
-}
-
-fn robot_laser_period(scenario: &Scenario) -> f64 {
-    let l = &scenario.robot.laser;
-    let transfer = robot::protocol::serial_time(l.telegram_bytes as usize, l.baud).as_secs_f64();
-    transfer.max(l.sweep_s.get())
 }

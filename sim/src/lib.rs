@@ -1,13 +1,14 @@
 //! # sim — the digital twin
 //!
-//! A differential-drive robot with a SICK laser in a 2D world, stepped deterministically and far
-//! faster than real time:
+//! A differential-drive robot with a SICK laser (on a pan-tilt, on the thesis's robot) and a
+//! sonar ring in a 2.5D world, stepped deterministically and far faster than real time:
 //!
 //! - [`config`]: world, robot and scenario files, with errors that name the file, line and field;
 //! - [`twin`]: the bevy_ecs world and its ordered schedule;
-//! - [`firmware`]: the base microcontroller's C firmware (thesis App. A), ported line by line,
-//!   and the board's serial timing;
-//! - [`motor`], [`battery`], [`laser`], [`world_map`]: the physical models;
+//! - [`firmware`]: the base and pan-tilt microcontrollers' C firmware (thesis App. A), ported
+//!   line by line, and the boards' serial timing;
+//! - [`motor`], [`battery`], [`laser`], [`sonar`], [`pan_tilt`], [`world_map`]: the physical
+//!   models;
 //! - [`sim_robot`]: [`SimRobot`], the twin behind the robot crate's hardware contract, plus the
 //!   sim-only [`GroundTruth`];
 //! - [`run`] and [`output`]: the `twin run` job and the files it writes.
@@ -20,6 +21,7 @@ pub mod config;
 pub mod firmware;
 pub mod laser;
 pub mod motor;
+pub mod pan_tilt;
 pub mod rng;
 pub mod sim_robot;
 pub mod twin;

@@ -3,9 +3,13 @@
 
 use crate::config::scenario::SonarSettings;
 use crate::config::{ConfigError, Scenario};
+use crate::laser::LaserFrame;
 use crate::sim_robot::{GroundTruth, SimError, SimRobot};
 use robot::control::{TourConfig, TourError, TourEvent, run_tour};
-use robot::hardware::{DriveBase, DriveWait, LaserScan, SonarCommand, SonarRing};
+use robot::hardware::{
+    DriveBase, DriveWait, LaserScan, PanTilt, PanTiltPosition, PanTiltStatus, SonarCommand,
+    SonarRing,
+};
 use robot::{Pose2, Stamp};
 use std::time::Instant;
 
@@ -18,6 +22,8 @@ pub struct ScanRecord {
     pub odometry: Pose2,
     /// The true pose of the base at the scan's stamp.
     pub truth: Pose2,
+    /// The laser's true frame at the scan's stamp (on the pan-tilt: panned and tilted).
+    pub frame: LaserFrame,
 }
 
 /// One full reading of the sonar ring, taken at rest at the end of a run.
@@ -58,12 +64,12 @@ pub struct RunRecord {
     pub final_odometry: Pose2,
     /// The true path, one pose per world step.
     pub true_path: Vec<(Stamp, Pose2)>,
-    /// The laser's pose on the base: scan points are in this frame.
-    pub laser_mount: Pose2,
     /// State of charge of the (logic, motor) batteries at the end.
     pub battery_charge: (f64, f64),
     /// The sonar ring's last reading, when the scenario fires it.
     pub sonar: Option<SonarRecord>,
+    /// The pan-tilt's status once it reached the scenario's position, before the script.
+    pub pan_tilt: Option<PanTiltStatus>,
 }
 
 impl RunRecord {
@@ -136,8 +142,15 @@ pub fn run_scenario(
         scenario: scenario.name.clone(),
         source,
     };
+    let pan_tilt = match scenario.pan_tilt {
+        Some(target) => Some(
+            position_head(&mut robot, target)
+                .map_err(|e| tour_error(hardware_error("(pan-tilt)", e)))?,
+        ),
+        None => None,
+    };
     if let Some(sonar) = &scenario.sonar {
-        start_sonar(&mut robot, sonar).map_err(|e| tour_error(hardware_error(e)))?;
+        start_sonar(&mut robot, sonar).map_err(|e| tour_error(hardware_error("(sonar)", e)))?;
     }
     let mut kept = Vec::new();
     let report = {
@@ -156,9 +169,10 @@ pub fn run_scenario(
         .map_err(tour_error)?
     };
     let sonar = match &scenario.sonar {
-        Some(settings) => {
-            Some(read_sonar_ring(&mut robot, settings).map_err(|e| tour_error(hardware_error(e)))?)
-        }
+        Some(settings) => Some(
+            read_sonar_ring(&mut robot, settings)
+                .map_err(|e| tour_error(hardware_error("(sonar)", e)))?,
+        ),
         None => None,
     };
     progress(report.steps, report.steps);
@@ -169,10 +183,14 @@ pub fn run_scenario(
             let truth = robot
                 .true_pose_at(scan.stamp)
                 .unwrap_or_else(|| robot.true_pose());
+            let frame = robot
+                .laser_frame_at(scan.stamp)
+                .unwrap_or_else(|| robot.twin().laser().frame_on(truth));
             ScanRecord {
                 scan,
                 odometry,
                 truth,
+                frame,
             }
         })
         .collect();
@@ -189,10 +207,29 @@ pub fn run_scenario(
         final_truth: twin.true_pose(),
         final_odometry: report.final_odometry,
         true_path: twin.true_path().collect(),
-        laser_mount: twin.laser().mount(),
         battery_charge: twin.battery_charge(),
         sonar,
+        pan_tilt,
     })
+}
+
+/// Ticks between two status polls while the head moves.
+const HEAD_POLL_MS: u16 = 50;
+/// Longest a head move may take, in polls (a full pan turn takes about 8 s).
+const HEAD_POLL_LIMIT: u32 = 1200;
+
+/// Waits for the pan-tilt to home, moves it to `target` and waits until both motors are off.
+fn position_head(robot: &mut SimRobot, target: PanTiltPosition) -> Result<PanTiltStatus, SimError> {
+    robot.wait_pan_tilt_ready()?;
+    let status = robot.move_pan_tilt_to(target, HEAD_POLL_MS, HEAD_POLL_LIMIT)?;
+    if status.idle() {
+        Ok(status)
+    } else {
+        Err(SimError::Timeout {
+            command: format!("g{} / e{} (head still moving)", target.pan, target.tilt),
+            waited: crate::twin::TICK * (u32::from(HEAD_POLL_MS) * HEAD_POLL_LIMIT),
+        })
+    }
 }
 
 /// `S`, `s2 Te Tr`, `s1`: the ring starts firing.
@@ -230,10 +267,10 @@ fn read_sonar_ring(
 }
 
 /// A hardware error before or after the script, reported as the tour's.
-fn hardware_error(source: SimError) -> TourError<SimError> {
+fn hardware_error(step: &str, source: SimError) -> TourError<SimError> {
     TourError::Hardware {
         index: 0,
-        step: "(sonar)".into(),
+        step: step.into(),
         source,
     }
 }

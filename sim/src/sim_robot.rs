@@ -12,19 +12,26 @@
 //! sleeping). Before every exchange the controller's clock catches up with the world, so a command
 //! is never sent into the simulated past; exchanges are thus timed to within one step.
 //!
+//! The pan-tilt microcontroller has its own serial line. At power-up it homes the head while
+//! narrating on that line; the first pan-tilt call waits for its `Listo`, as a real backend must
+//! (commands sent during homing would disturb it).
+//!
 //! Ground truth is not part of the contract: it is offered by the sim-only [`GroundTruth`] trait.
 
 use crate::config::{ConfigError, Scenario};
+use crate::laser::LaserFrame;
 use crate::twin::{TICK, Twin};
 use core::time::Duration;
 use robot::hardware::{
     ArgumentError, Batteries, BatteryVoltages, DriveBase, DriveCommand, DriveStatus, DriveWait,
-    ErrorKind, Hardware, HardwareError, Laser, LaserScan, SonarCommand, SonarEchoes, SonarRing,
+    ErrorKind, Hardware, HardwareError, Laser, LaserScan, PanTilt, PanTiltCommand, PanTiltStatus,
+    PanTiltWait, SonarCommand, SonarEchoes, SonarRing,
 };
 use robot::protocol::base::{
     BATTERY_REQUEST, ReplyError, SONAR_REQUEST, STATUS_REQUEST, encode_command, encode_sonar,
     encode_wait, parse_ack, parse_battery, parse_sonar_report, parse_status,
 };
+use robot::protocol::pan_tilt as pt_protocol;
 use robot::protocol::serial_time;
 use robot::{Pose2, Stamp};
 use std::collections::VecDeque;
@@ -42,6 +49,9 @@ pub trait GroundTruth {
     fn distance_travelled(&self) -> f64;
     /// Times the base came into contact with a wall.
     fn collisions(&self) -> u32;
+    /// The laser's true frame at `t` (its optical centre and where it looks), or `None` outside
+    /// the simulated time.
+    fn laser_frame_at(&self, t: Stamp) -> Option<LaserFrame>;
 }
 
 impl GroundTruth for Twin {
@@ -56,6 +66,9 @@ impl GroundTruth for Twin {
     }
     fn collisions(&self) -> u32 {
         Twin::collisions(self)
+    }
+    fn laser_frame_at(&self, t: Stamp) -> Option<LaserFrame> {
+        Twin::laser_frame_at(self, t)
     }
 }
 
@@ -92,15 +105,47 @@ impl HardwareError for SimError {
     }
 }
 
+/// One of the robot's two microcontroller serial lines.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+enum Port {
+    /// The base microcontroller: drive, sonar, batteries.
+    Base,
+    /// The pan-tilt microcontroller.
+    PanTilt,
+}
+
+/// The host's end of a serial line.
+#[derive(Clone, Debug)]
+struct Line {
+    /// Bit rate.
+    baud: u32,
+    /// Bytes received, with their arrival times.
+    rx: VecDeque<(Stamp, u8)>,
+}
+
+impl Line {
+    fn new(baud: u32) -> Self {
+        Line {
+            baud,
+            rx: VecDeque::new(),
+        }
+    }
+}
+
+/// How long the pan-tilt may take to home at power-up before the backend gives up.
+const HOMING_LIMIT: Duration = Duration::from_secs(120);
+
 /// The twin, driven through the hardware contract.
 pub struct SimRobot {
     twin: Twin,
     /// The controller's clock.
     host: Stamp,
-    /// Bit rate of the base microcontroller's line.
-    base_baud: u32,
-    /// Bytes received from the base, with their arrival times.
-    rx: VecDeque<(Stamp, u8)>,
+    /// The base microcontroller's line.
+    base: Line,
+    /// The pan-tilt microcontroller's line, if the robot has one.
+    pan_tilt: Option<Line>,
+    /// The pan-tilt has said `Listo`.
+    pan_tilt_ready: bool,
     /// The sonar firing sequence last set (`S`), the firmware's default at power-on.
     sonar_sequence: Vec<u8>,
 }
@@ -109,16 +154,19 @@ impl SimRobot {
     /// Wraps a twin whose base talks at `base_baud`, and waits for the base's power-on greeting
     /// (which it discards, as a backend flushes its input when it connects).
     pub fn new(twin: Twin, base_baud: u32) -> Self {
+        let pan_tilt = twin.pan_tilt_board().map(|b| Line::new(b.baud()));
         let mut robot = SimRobot {
             twin,
             host: Stamp::ZERO,
-            base_baud,
-            rx: VecDeque::new(),
+            base: Line::new(base_baud),
+            pan_tilt,
+            pan_tilt_ready: false,
             sonar_sequence: (0..16).collect(),
         };
-        let greeting_done = robot.read_line("(power-on greeting)", Stamp::from_millis(500));
+        let greeting_done =
+            robot.read_line(Port::Base, "(power-on greeting)", Stamp::from_millis(500));
         debug_assert!(greeting_done.is_ok(), "the firmware greets at power-on");
-        robot.rx.clear();
+        robot.base.rx.clear();
         robot
     }
 
@@ -160,30 +208,74 @@ impl SimRobot {
         self.host = self.host.max(self.twin.now());
     }
 
-    /// Sends one line to the base and returns its reply line and when the firmware wrote it.
-    fn transact(&mut self, line: &str, works_for: Duration) -> Result<(Stamp, String), SimError> {
-        self.catch_up();
-        let arrival = self.host + serial_time(line.len(), self.base_baud);
-        self.twin
-            .board_mut()
-            .deliver(arrival, line.as_bytes().to_vec());
-        self.host = arrival;
-        let deadline = arrival + works_for + REPLY_MARGIN;
-        self.read_line(line.trim_end(), deadline)
+    fn line_mut(&mut self, port: Port) -> &mut Line {
+        match port {
+            Port::Base => &mut self.base,
+            Port::PanTilt => self
+                .pan_tilt
+                .as_mut()
+                .expect("pan-tilt calls check the unit exists"),
+        }
     }
 
-    /// Reads the next complete line from the base, stepping the world until it has arrived.
-    /// Returns when the firmware wrote it and the text.
-    fn read_line(&mut self, command: &str, deadline: Stamp) -> Result<(Stamp, String), SimError> {
-        loop {
-            while let Some(byte) = self.twin.board_mut().pop_output() {
-                self.rx.push_back(byte);
+    /// Moves the bytes the microcontroller has sent into the host's receive buffer.
+    fn receive(&mut self, port: Port) {
+        let mut bytes = Vec::new();
+        match port {
+            Port::Base => bytes.extend(std::iter::from_fn(|| self.twin.board_mut().pop_output())),
+            Port::PanTilt => {
+                if let Some(board) = self.twin.pan_tilt_board_mut() {
+                    bytes.extend(std::iter::from_fn(|| board.pop_output()));
+                }
             }
-            if let Some(end) = self.rx.iter().position(|(_, b)| *b == b'\n') {
-                let arrived = self.rx[end].0;
+        }
+        self.line_mut(port).rx.extend(bytes);
+    }
+
+    /// Sends one line to the base and returns its reply line and when the firmware wrote it.
+    fn transact(&mut self, line: &str, works_for: Duration) -> Result<(Stamp, String), SimError> {
+        self.transact_on(Port::Base, line, works_for)
+    }
+
+    /// Sends one line on `port` and returns the reply line and when the firmware wrote it.
+    fn transact_on(
+        &mut self,
+        port: Port,
+        line: &str,
+        works_for: Duration,
+    ) -> Result<(Stamp, String), SimError> {
+        self.catch_up();
+        let arrival = self.host + serial_time(line.len(), self.line_mut(port).baud);
+        let bytes = line.as_bytes().to_vec();
+        match port {
+            Port::Base => self.twin.board_mut().deliver(arrival, bytes),
+            Port::PanTilt => self
+                .twin
+                .pan_tilt_board_mut()
+                .expect("pan-tilt calls check the unit exists")
+                .deliver(arrival, bytes),
+        }
+        self.host = arrival;
+        let deadline = arrival + works_for + REPLY_MARGIN;
+        self.read_line(port, line.trim_end(), deadline)
+    }
+
+    /// Reads the next complete line from `port`, stepping the world until it has arrived.
+    /// Returns when the firmware wrote it and the text.
+    fn read_line(
+        &mut self,
+        port: Port,
+        command: &str,
+        deadline: Stamp,
+    ) -> Result<(Stamp, String), SimError> {
+        loop {
+            self.receive(port);
+            let line = self.line_mut(port);
+            if let Some(end) = line.rx.iter().position(|(_, b)| *b == b'\n') {
+                let arrived = line.rx[end].0;
                 if arrived <= deadline {
-                    let written = before(self.rx[0].0, serial_time(1, self.base_baud));
-                    let bytes: Vec<u8> = self.rx.drain(..=end).map(|(_, b)| b).collect();
+                    let written = before(line.rx[0].0, serial_time(1, line.baud));
+                    let bytes: Vec<u8> = line.rx.drain(..=end).map(|(_, b)| b).collect();
                     self.host = self.host.max(arrived);
                     return Ok((written, String::from_utf8_lossy(&bytes).into_owned()));
                 }
@@ -313,7 +405,7 @@ impl SonarRing for SimRobot {
         let mut lines = vec![first];
         let deadline = self.host + REPLY_MARGIN;
         while lines.len() < count {
-            lines.push(self.read_line("s", deadline)?.1);
+            lines.push(self.read_line(Port::Base, "s", deadline)?.1);
         }
         let refs: Vec<&str> = lines.iter().map(String::as_str).collect();
         let times = parse_sonar_report(&refs, count)?;
@@ -324,6 +416,53 @@ impl SonarRing for SimRobot {
             times,
             measured: (0..count).map(|i| measured[i]).collect(),
         })
+    }
+}
+
+impl SimRobot {
+    /// Waits until the pan-tilt has finished homing (its `Listo`), discarding what it narrates
+    /// on the way. Returns at once after the first time.
+    pub fn wait_pan_tilt_ready(&mut self) -> Result<(), SimError> {
+        if self.pan_tilt.is_none() {
+            return Err(SimError::Unsupported("pan-tilt unit"));
+        }
+        if self.pan_tilt_ready {
+            return Ok(());
+        }
+        self.catch_up();
+        let deadline = Stamp::ZERO + HOMING_LIMIT;
+        loop {
+            let (_, line) = self.read_line(Port::PanTilt, "(power-up homing)", deadline)?;
+            if line == pt_protocol::READY {
+                self.pan_tilt_ready = true;
+                return Ok(());
+            }
+        }
+    }
+}
+
+impl PanTilt for SimRobot {
+    fn pan_tilt(&mut self, command: PanTiltCommand) -> Result<(), SimError> {
+        self.wait_pan_tilt_ready()?;
+        let line = pt_protocol::encode_command(&command)?;
+        let (_, reply) = self.transact_on(Port::PanTilt, &line, Duration::ZERO)?;
+        parse_ack(&reply, command.letter())?;
+        Ok(())
+    }
+
+    fn wait_pan_tilt(&mut self, wait: PanTiltWait) -> Result<(), SimError> {
+        self.wait_pan_tilt_ready()?;
+        let line = pt_protocol::encode_wait(&wait);
+        let (_, reply) = self.transact_on(Port::PanTilt, &line, TICK * u32::from(wait.max_ms))?;
+        parse_ack(&reply, 'w')?;
+        Ok(())
+    }
+
+    fn pan_tilt_status(&mut self) -> Result<PanTiltStatus, SimError> {
+        self.wait_pan_tilt_ready()?;
+        let (written, reply) =
+            self.transact_on(Port::PanTilt, pt_protocol::STATUS_REQUEST, Duration::ZERO)?;
+        Ok(pt_protocol::parse_status(&reply, written)?)
     }
 }
 
@@ -346,5 +485,8 @@ impl GroundTruth for SimRobot {
     }
     fn collisions(&self) -> u32 {
         self.twin.collisions()
+    }
+    fn laser_frame_at(&self, t: Stamp) -> Option<LaserFrame> {
+        self.twin.laser_frame_at(t)
     }
 }

@@ -54,3 +54,10 @@ pub fn pioneer_in(world: &WorldDescription, noise: NoiseSettings, seed: u64) -> 
     let twin = Twin::new(world, &robot, &noise, seed).unwrap_or_else(|e| panic!("{e}"));
     SimRobot::new(twin, robot.drive.serial_baud)
 }
+
+/// The thesis's robot (laser on the pan-tilt) in `world`, seen through the hardware contract.
+pub fn thesis_in(world: &WorldDescription, noise: NoiseSettings, seed: u64) -> SimRobot {
+    let robot = robot("thesis-roca");
+    let twin = Twin::new(world, &robot, &noise, seed).unwrap_or_else(|e| panic!("{e}"));
+    SimRobot::new(twin, robot.drive.serial_baud)
+}

@@ -30,7 +30,8 @@ pub use drive::{
 };
 pub use laser::LaserScan;
 pub use pan_tilt::{
-    PAN_MAX, PanTiltCommand, PanTiltPosition, PanTiltStatus, PanTiltWait, TILT_MAX,
+    PAN_MAX, PAN_TILT_SPEED_LIMIT, PanTiltCommand, PanTiltPosition, PanTiltStatus, PanTiltWait,
+    TILT_MAX,
 };
 pub use sonar::{
     SONAR_COUNT, SONAR_NO_ECHO, SONAR_TIME_UNIT_S, SPEED_OF_SOUND, SonarCommand, SonarEchoes,
@@ -162,8 +163,35 @@ pub trait PanTilt: Hardware {
     /// The pan-tilt's `w`: returns when the flagged motors are idle or after `wait.max_ms`.
     fn wait_pan_tilt(&mut self, wait: PanTiltWait) -> Result<(), Self::Error>;
 
-    /// The pan-tilt's `l`: motor counters since the last move and motor flags.
+    /// The pan-tilt's `l`: positions, clicks since the last index, switches and motor flags.
     fn pan_tilt_status(&mut self) -> Result<PanTiltStatus, Self::Error>;
+
+    /// `g` and `e` to `target`, then polls `l` every `poll` until both motors are off and
+    /// returns the last status (which still shows a motor on if `limit` polls were not enough).
+    fn move_pan_tilt_to(
+        &mut self,
+        target: PanTiltPosition,
+        poll: u16,
+        limit: u32,
+    ) -> Result<PanTiltStatus, Self::Error>
+    where
+        Self: Sized,
+    {
+        self.pan_tilt(PanTiltCommand::Pan(target.pan))?;
+        self.pan_tilt(PanTiltCommand::Tilt(target.tilt))?;
+        let mut status = self.pan_tilt_status()?;
+        let mut polls = 0;
+        while !status.idle() && polls < limit {
+            self.wait_pan_tilt(PanTiltWait {
+                max_ms: poll,
+                pan: false,
+                tilt: false,
+            })?;
+            status = self.pan_tilt_status()?;
+            polls += 1;
+        }
+        Ok(status)
+    }
 }
 
 /// The battery voltages measured by the base microcontroller.

@@ -8,6 +8,7 @@
 //! real serial backend agree byte for byte.
 
 pub mod base;
+pub mod pan_tilt;
 
 /// Time to send `bytes` bytes over an asynchronous serial line at `baud` bits per second with one
 /// start bit, eight data bits and one stop bit (8N1: ten bits per byte).

@@ -32,6 +32,8 @@ pub struct RobotDescription {
     pub battery: BatteryDescription,
     /// The sonar ring, if the robot has one.
     pub sonar: Option<SonarDescription>,
+    /// The pan-tilt unit the laser rides on, if the robot has one.
+    pub pan_tilt: Option<PanTiltDescription>,
     /// The file it was read from.
     pub path: PathBuf,
 }
@@ -84,17 +86,16 @@ pub struct BodyDescription {
     pub height_m: Positive,
 }
 
-/// The laser rangefinder and where it sits on the base.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// The laser rangefinder and where it sits on the base. On a robot with a pan-tilt the mount
+/// comes from the pan-tilt (the laser at level tilt, looking forward) and the file must not give
+/// one.
+#[derive(Clone, Debug, PartialEq)]
 pub struct LaserDescription {
     /// Mount position ahead of the wheel axle, metres.
     pub x_m: Finite,
     /// Mount position to the left of the axle's centre, metres.
-    #[serde(default = "zero")]
     pub y_m: Finite,
     /// Mount heading, degrees counter-clockwise.
-    #[serde(default = "zero")]
     pub yaw_deg: Finite,
     /// Height of the scan plane above the floor, metres.
     pub z_m: Positive,
@@ -112,6 +113,23 @@ pub struct LaserDescription {
     pub sweep_s: Positive,
     /// Bytes of one scan telegram on the serial line.
     pub telegram_bytes: u32,
+}
+
+/// The `[laser]` section as written: the mount is optional (absent on a pan-tilt).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LaserFile {
+    x_m: Option<Finite>,
+    y_m: Option<Finite>,
+    yaw_deg: Option<Finite>,
+    z_m: Option<Positive>,
+    beams: u16,
+    fov_deg: Positive,
+    range_max_m: Positive,
+    sigma_m: NonNegative,
+    baud: u32,
+    sweep_s: Positive,
+    telegram_bytes: u32,
 }
 
 /// A ring of ultrasonic transducers fired by the base microcontroller.
@@ -139,6 +157,45 @@ pub struct SonarDescription {
     pub sigma_m: NonNegative,
     /// Height of the transducers above the floor, metres.
     pub height_m: Positive,
+}
+
+/// The pan-tilt unit carrying the laser (thesis §2.5, App. A.3.2, App. D).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PanTiltDescription {
+    /// Pan axis ahead of the wheel axle, metres.
+    pub axis_x_m: Finite,
+    /// Pan axis to the left of the axle's centre, metres.
+    #[serde(default = "zero")]
+    pub axis_y_m: Finite,
+    /// Height of the tilt axis above the floor, metres.
+    pub axis_z_m: Positive,
+    /// The laser's optical centre ahead of the tilt axis, in the tilting frame (App. D `DELTAZ`).
+    pub laser_forward_m: Finite,
+    /// The laser's optical centre above the tilt axis, in the tilting frame (App. D `DELTAY`).
+    pub laser_up_m: Finite,
+    /// Bit rate of the pan-tilt microcontroller's serial line.
+    pub serial_baud: u32,
+    /// Pan angle per pan motor turn (one position), degrees.
+    pub pan_deg_per_turn: Positive,
+    /// Tilt angle per tilt motor turn (one position), degrees.
+    pub tilt_deg_per_turn: Positive,
+    /// The tilt position at which the scan plane is level.
+    pub level_position: u16,
+    /// Pan angle at power-up, before homing, degrees from pan position 0.
+    #[serde(default = "zero")]
+    pub initial_pan_deg: Finite,
+    /// Tilt angle at power-up, before homing, degrees above level.
+    #[serde(default = "zero")]
+    pub initial_tilt_deg: Finite,
+    /// Pan motor gearbox, motor turns per output turn.
+    pub pan_gear_ratio: Positive,
+    /// Tilt motor gearbox, motor turns per output turn.
+    pub tilt_gear_ratio: Positive,
+    /// The pan motor (on the 24 V motor pair).
+    pub pan_motor: MotorDescription,
+    /// The tilt motor (on the 12 V tap of the motor pair).
+    pub tilt_motor: MotorDescription,
 }
 
 /// The two battery pairs.
@@ -209,6 +266,7 @@ impl RobotDescription {
                 return Err(invalid(field, "expected a bit rate above 0".into()));
             }
         }
+        let laser = resolve_laser(&file, &invalid)?;
         if let Some(sonar) = &file.sonar {
             if !(1..=16).contains(&sonar.count) {
                 return Err(invalid(
@@ -236,11 +294,22 @@ impl RobotDescription {
             drive: file.drive,
             motor: file.motor,
             body: file.body,
-            laser: file.laser,
+            laser,
             battery: file.battery,
             sonar: file.sonar,
+            pan_tilt: file.pan_tilt,
             path: source.path.clone(),
         })
+    }
+
+    /// The laser's optical centre on the base with the pan-tilt at pan 0 and level tilt, and
+    /// the scan plane's height: `(x, y, z)` in metres.
+    pub fn level_laser_position(&self) -> (f64, f64, f64) {
+        (
+            self.laser.x_m.get(),
+            self.laser.y_m.get(),
+            self.laser.z_m.get(),
+        )
     }
 
     /// The nominal geometry the robot's odometry uses.
@@ -263,6 +332,87 @@ impl RobotDescription {
     }
 }
 
+/// The laser's description with its mount: from the `[laser]` section, or from the pan-tilt.
+fn resolve_laser(
+    file: &RobotFile,
+    invalid: &dyn Fn(&str, String) -> ConfigError,
+) -> Result<LaserDescription, ConfigError> {
+    let l = &file.laser;
+    let (x_m, y_m, yaw_deg, z_m) = match &file.pan_tilt {
+        Some(pt) => {
+            if pt.level_position > 100 {
+                return Err(invalid(
+                    "pan_tilt.level_position",
+                    format!("expected 0..=100, found {}", pt.level_position),
+                ));
+            }
+            if pt.serial_baud == 0 {
+                return Err(invalid(
+                    "pan_tilt.serial_baud",
+                    "expected a bit rate above 0".into(),
+                ));
+            }
+            for (field, given) in [
+                ("laser.x_m", l.x_m.is_some()),
+                ("laser.y_m", l.y_m.is_some()),
+                ("laser.yaw_deg", l.yaw_deg.is_some()),
+                ("laser.z_m", l.z_m.is_some()),
+            ] {
+                if given {
+                    return Err(invalid(
+                        field,
+                        "the laser rides on the pan-tilt: its position comes from [pan_tilt] \
+                         (axis_x_m, axis_y_m, axis_z_m, laser_forward_m, laser_up_m); remove this key"
+                            .into(),
+                    ));
+                }
+            }
+            let z = pt.axis_z_m.get() + pt.laser_up_m.get();
+            if z <= 0.0 {
+                return Err(invalid(
+                    "pan_tilt.laser_up_m",
+                    format!("puts the level laser at {z} m: expected above the floor"),
+                ));
+            }
+            (
+                Finite(pt.axis_x_m.get() + pt.laser_forward_m.get()),
+                pt.axis_y_m,
+                Finite(0.0),
+                Positive(z),
+            )
+        }
+        None => {
+            let (Some(x), Some(z)) = (l.x_m, l.z_m) else {
+                let missing = if l.x_m.is_none() {
+                    "laser.x_m"
+                } else {
+                    "laser.z_m"
+                };
+                return Err(invalid(
+                    missing,
+                    "expected the laser's mount (x_m, z_m; y_m and yaw_deg default to 0) \
+                     on a robot without a pan-tilt"
+                        .into(),
+                ));
+            };
+            (x, l.y_m.unwrap_or(zero()), l.yaw_deg.unwrap_or(zero()), z)
+        }
+    };
+    Ok(LaserDescription {
+        x_m,
+        y_m,
+        yaw_deg,
+        z_m,
+        beams: l.beams,
+        fov_deg: l.fov_deg,
+        range_max_m: l.range_max_m,
+        sigma_m: l.sigma_m,
+        baud: l.baud,
+        sweep_s: l.sweep_s,
+        telegram_bytes: l.telegram_bytes,
+    })
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RobotFile {
@@ -274,9 +424,10 @@ struct RobotFile {
     drive: DriveDescription,
     motor: MotorDescription,
     body: BodyDescription,
-    laser: LaserDescription,
+    laser: LaserFile,
     battery: BatteryDescription,
     sonar: Option<SonarDescription>,
+    pan_tilt: Option<PanTiltDescription>,
 }
 
 #[cfg(test)]

@@ -25,6 +25,10 @@
 //! echo_ms = 50                          # `s2 Te Tr`: echo window and relax time
 //! relax_ms = 20
 //!
+//! [pan_tilt]                            # optional, robots with a pan-tilt: where the head goes
+//! pan = 0                               # before the script (`g`, `e`; default pan 0, the
+//! tilt = 20                             # robot's level tilt position)
+//!
 //! [tour]                                # optional; how the controller paces itself
 //! pacing = "stop-and-go"                # or "polling" (see robot::control::tour)
 //! settle_s = 0.1                        # stop-and-go: wait after the motors stop
@@ -115,6 +119,8 @@ pub struct Scenario {
     pub tour: TourConfig,
     /// Whether and how the sonar ring fires.
     pub sonar: Option<SonarSettings>,
+    /// Where the pan-tilt head goes before the script, on a robot with a pan-tilt.
+    pub pan_tilt: Option<robot::hardware::PanTiltPosition>,
     /// The file it was read from.
     pub path: PathBuf,
 }
@@ -204,6 +210,38 @@ impl Scenario {
             }
             _ => None,
         };
+        let pan_tilt = match (&robot.pan_tilt, &file.pan_tilt) {
+            (None, None) => None,
+            (None, Some(_)) => {
+                return Err(source.error_in_file(
+                    Some("pan_tilt".into()),
+                    format!("the robot `{}` has no pan-tilt unit", robot.name),
+                ));
+            }
+            (Some(unit), f) => {
+                let pan = f.as_ref().and_then(|f| f.pan).unwrap_or(0);
+                let tilt = f
+                    .as_ref()
+                    .and_then(|f| f.tilt)
+                    .unwrap_or(unit.level_position);
+                for (field, value, max) in [
+                    ("pan_tilt.pan", pan, robot::hardware::PAN_MAX),
+                    ("pan_tilt.tilt", tilt, robot::hardware::TILT_MAX),
+                ] {
+                    if value > u16::from(max) {
+                        return Err(source.error_in_file(
+                            Some(field.into()),
+                            format!("expected a position 0..={max}, found {value}"),
+                        ));
+                    }
+                }
+                let position = robot::hardware::PanTiltPosition {
+                    pan: pan as u8,
+                    tilt: tilt as u8,
+                };
+                Some(position)
+            }
+        };
         Ok(Scenario {
             name: file.name,
             description: file.description,
@@ -214,6 +252,7 @@ impl Scenario {
             steps,
             tour,
             sonar,
+            pan_tilt,
             path: source.path.clone(),
         })
     }
@@ -253,6 +292,14 @@ struct ScenarioFile {
     script: ScriptFile,
     tour: Option<TourFile>,
     sonar: Option<SonarFile>,
+    pan_tilt: Option<PanTiltFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PanTiltFile {
+    pan: Option<u16>,
+    tilt: Option<u16>,
 }
 
 #[derive(Deserialize)]

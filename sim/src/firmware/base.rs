@@ -217,11 +217,17 @@ impl BaseFirmware {
         self.g_ad = adc;
     }
 
-    /// `check_rtf` and `check_end_commands`: the main loop's work after a real-time interrupt.
-    /// `left_edges` and `right_edges` are what the pulse accumulators counted since they were
-    /// last latched.
-    pub fn check_rtf(&mut self, left_edges: u32, right_edges: u32) {
-        self.get_vel(left_edges, right_edges);
+    /// `get_vel`: the main loop latches the 8-bit pulse accumulators, which counted
+    /// `left_edges` and `right_edges` since they were last latched (they saturate at 255,
+    /// `PACMX`).
+    pub fn latch_encoders(&mut self, left_edges: u32, right_edges: u32) {
+        self.g_left_vel = left_edges.min(255) as u8;
+        self.g_right_vel = right_edges.min(255) as u8;
+    }
+
+    /// `check_rtf` after `get_vel`, and `check_end_commands`: the main loop's work after a
+    /// real-time interrupt.
+    pub fn check_rtf(&mut self) {
         self.speed_control();
         self.ac_control();
         self.sonar_demon();
@@ -231,7 +237,8 @@ impl BaseFirmware {
     /// An interrupt followed at once by the main loop's work (a main loop that is never busy).
     pub fn rti_tick(&mut self, left_edges: u32, right_edges: u32, adc: [u16; 4]) {
         self.rti_interrupt(adc);
-        self.check_rtf(left_edges, right_edges);
+        self.latch_encoders(left_edges, right_edges);
+        self.check_rtf();
     }
 
     /// The H-bridge inputs (left, right).
@@ -565,12 +572,6 @@ impl BaseFirmware {
         self.max_left_vel_clicks = self.k_vel_ini;
         self.max_right_vel_clicks = self.k_vel_ini.wrapping_neg();
         self.set_velocity();
-    }
-
-    /// `get_vel`: latch the 8-bit pulse accumulators (they saturate at 255, `PACMX`).
-    fn get_vel(&mut self, left_edges: u32, right_edges: u32) {
-        self.g_left_vel = left_edges.min(255) as u8;
-        self.g_right_vel = right_edges.min(255) as u8;
     }
 
     fn speed_control(&mut self) {

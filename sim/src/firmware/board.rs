@@ -1,11 +1,12 @@
-//! The base microcontroller board: the firmware, its serial port, and when its main loop is free.
+//! A microcontroller board: the firmware, its serial port, and when its main loop is free.
 //!
-//! The firmware's main loop does everything but the interrupts: it executes a received line,
-//! then, if a real-time interrupt has happened, runs `check_rtf` once. `ser0_putchar` busy-waits
+//! Both of the robot's microcontrollers (the base's and the pan-tilt's) run the same shape of
+//! program: interrupts count encoder edges and set a flag every 1.024 ms; the main loop executes a
+//! received line, then, if a real-time interrupt has happened, runs `check_rtf` once. `ser0_putchar` busy-waits
 //! until the UART can take the next byte, so while a reply goes out at 9600 bps — 18 ms for a
 //! status line — the main loop is stuck: the speed loop does not run, the ramp timer does not
 //! count, and the 8-bit encoder pulse accumulators, no longer latched, saturate at 255.
-//! [`BaseBoard`] reproduces that timing:
+//! [`Board`] reproduces that timing for any firmware that implements [`MainLoop`]:
 //!
 //! - a byte written by the firmware takes ten bit-times on the line after the previous one, and
 //!   `putchar` returns when the byte has moved into the UART's data register;
@@ -17,10 +18,37 @@ use super::base::BaseFirmware;
 use robot::Stamp;
 use std::collections::VecDeque;
 
+/// The main loop of a firmware, as a board drives it.
+pub trait MainLoop {
+    /// Decodes and executes one received command line (`decode_command`, `do_command`).
+    fn execute_line(&mut self, line: &[u8]);
+    /// The main loop's pass after a real-time interrupt: `check_rtf` and what follows it.
+    fn after_interrupt(&mut self);
+    /// Takes the bytes written to the serial port since the last call.
+    fn take_output(&mut self) -> Vec<u8>;
+}
+
+impl MainLoop for BaseFirmware {
+    fn execute_line(&mut self, line: &[u8]) {
+        BaseFirmware::execute_line(self, line);
+    }
+    fn after_interrupt(&mut self) {
+        self.check_rtf();
+    }
+    fn take_output(&mut self) -> Vec<u8> {
+        BaseFirmware::take_output(self)
+    }
+}
+
 /// The base microcontroller with its serial port.
+pub type BaseBoard = Board<BaseFirmware>;
+
+/// A microcontroller with its serial port.
 #[derive(Clone, Debug)]
-pub struct BaseBoard {
-    firmware: BaseFirmware,
+pub struct Board<F> {
+    firmware: F,
+    /// Bit rate of the serial line.
+    baud: u32,
     /// Ten bit-times, nanoseconds.
     byte_ns: u64,
     /// Lines received from the host, with the time their `\n` arrived.
@@ -39,11 +67,20 @@ pub struct BaseBoard {
 }
 
 impl BaseBoard {
-    /// A board just switched on, talking at `baud` bits per second; its greeting goes out at
-    /// time zero.
+    /// The base microcontroller just switched on, talking at `baud` bits per second; its greeting
+    /// goes out at time zero.
     pub fn power_on(baud: u32) -> Self {
-        let mut board = BaseBoard {
-            firmware: BaseFirmware::power_on(),
+        Board::new(BaseFirmware::power_on(), baud)
+    }
+}
+
+impl<F: MainLoop> Board<F> {
+    /// A board running `firmware` just switched on, talking at `baud` bits per second; whatever
+    /// the firmware wrote at power-on goes out at time zero.
+    pub fn new(firmware: F, baud: u32) -> Self {
+        let mut board = Board {
+            firmware,
+            baud,
             byte_ns: robot::protocol::serial_time(1, baud).as_nanos() as u64,
             inbox: VecDeque::new(),
             outbox: VecDeque::new(),
@@ -57,13 +94,18 @@ impl BaseBoard {
         board
     }
 
+    /// Bit rate of the serial line.
+    pub fn baud(&self) -> u32 {
+        self.baud
+    }
+
     /// The firmware.
-    pub fn firmware(&self) -> &BaseFirmware {
+    pub fn firmware(&self) -> &F {
         &self.firmware
     }
 
-    /// The firmware, for tests that set its state directly.
-    pub fn firmware_mut(&mut self) -> &mut BaseFirmware {
+    /// The firmware, to feed its interrupts or set its state directly.
+    pub fn firmware_mut(&mut self) -> &mut F {
         &mut self.firmware
     }
 
@@ -83,9 +125,15 @@ impl BaseBoard {
     }
 
     /// One real-time interrupt at `now`, and whatever the main loop does until the next one.
-    /// `latch` reads and clears the two pulse accumulators (left, right).
-    pub fn tick(&mut self, now: Stamp, adc: [u16; 4], latch: impl FnOnce() -> (u32, u32)) {
-        self.firmware.rti_interrupt(adc);
+    /// `interrupts` runs the interrupt handlers of this tick (they run even while the main loop
+    /// is busy); `latch` is what the main loop reads from the hardware before `check_rtf`.
+    pub fn tick(
+        &mut self,
+        now: Stamp,
+        interrupts: impl FnOnce(&mut F),
+        latch: impl FnOnce(&mut F),
+    ) {
+        interrupts(&mut self.firmware);
         self.rtf_pending = true;
         if now < self.busy_until {
             return;
@@ -104,8 +152,8 @@ impl BaseBoard {
         }
         if self.rtf_pending {
             self.rtf_pending = false;
-            let (left, right) = latch();
-            self.firmware.check_rtf(left, right);
+            latch(&mut self.firmware);
+            self.firmware.after_interrupt();
             self.send_output(now);
         }
     }
@@ -133,6 +181,14 @@ mod tests {
     use super::*;
 
     const TICK: u64 = 1_024_000;
+
+    fn idle(fw: &mut BaseFirmware) {
+        fw.rti_interrupt([0; 4]);
+    }
+
+    fn zero(fw: &mut BaseFirmware) {
+        fw.latch_encoders(0, 0);
+    }
     /// After the 31-byte power-on greeting has gone out.
     const T0: u64 = 50 * TICK;
 
@@ -145,7 +201,7 @@ mod tests {
         let mut board = BaseBoard::power_on(9600);
         board.deliver(Stamp(TICK), b"*\n".to_vec());
         for k in 1..=40 {
-            board.tick(Stamp(k * TICK), [0; 4], || (0, 0));
+            board.tick(Stamp(k * TICK), idle, zero);
         }
         let out = read_all(&mut board);
         let text: Vec<u8> = out.iter().map(|(_, b)| *b).collect();
@@ -161,7 +217,7 @@ mod tests {
         let mut board = BaseBoard::power_on(9600);
         read_all(&mut board);
         board.deliver(Stamp(T0), b"l\n".to_vec());
-        board.tick(Stamp(T0), [0; 4], || (0, 0));
+        board.tick(Stamp(T0), idle, zero);
         let reply = read_all(&mut board);
         let text: Vec<u8> = reply.iter().map(|(_, b)| *b).collect();
         assert_eq!(text, b"l0.00 0.00 0 0 0\n");
@@ -171,15 +227,15 @@ mod tests {
         // The main loop stays in ser0_putchar for 15 byte-times: check_rtf is skipped.
         let mut latched = 0;
         for k in 1..=15 {
-            board.tick(Stamp(T0 + k * TICK), [0; 4], || {
+            board.tick(Stamp(T0 + k * TICK), idle, |fw| {
                 latched += 1;
-                (0, 0)
+                fw.latch_encoders(0, 0);
             });
         }
         assert_eq!(latched, 0, "no check_rtf while transmitting");
-        board.tick(Stamp(T0 + 16 * TICK), [0; 4], || {
+        board.tick(Stamp(T0 + 16 * TICK), idle, |fw| {
             latched += 1;
-            (0, 0)
+            fw.latch_encoders(0, 0);
         });
         assert_eq!(latched, 1, "check_rtf runs once when the main loop is back");
     }
@@ -189,11 +245,11 @@ mod tests {
         let mut board = BaseBoard::power_on(9600);
         read_all(&mut board);
         board.deliver(Stamp(T0), b"l\n".to_vec());
-        board.tick(Stamp(T0), [0; 4], || (0, 0));
+        board.tick(Stamp(T0), idle, zero);
         board.deliver(Stamp(T0 + 3 * TICK), b"*\n".to_vec());
         board.deliver(Stamp(T0 + 4 * TICK), b"z1\n".to_vec());
         for k in 1..40 {
-            board.tick(Stamp(T0 + k * TICK), [0; 4], || (0, 0));
+            board.tick(Stamp(T0 + k * TICK), idle, zero);
         }
         let text: Vec<u8> = read_all(&mut board).iter().map(|(_, b)| *b).collect();
         assert!(

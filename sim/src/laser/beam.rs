@@ -62,6 +62,28 @@ impl Default for Optics {
     }
 }
 
+impl Optics {
+    /// The thresholds as cosines of the incidence, computed once for many pulses.
+    pub fn prepared(&self) -> PreparedOptics {
+        PreparedOptics {
+            optics: *self,
+            cos_grazing: self.grazing.cos(),
+            cos_glass_return: self.glass_return.cos(),
+            cos_metal_return: self.metal_return.cos(),
+        }
+    }
+}
+
+/// [`Optics`] with the cosines of its thresholds, so a pulse compares cosines instead of taking
+/// an arc cosine at every surface.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct PreparedOptics {
+    optics: Optics,
+    cos_grazing: f64,
+    cos_glass_return: f64,
+    cos_metal_return: f64,
+}
+
 /// A round obstacle that moves: the robot's own body, a vertical cylinder from the floor, which
 /// reflected pulses can meet.
 #[derive(Copy, Clone, Debug, PartialEq)]
@@ -103,6 +125,20 @@ pub fn trace(
     max_range: f64,
     rng: &mut SimRng,
 ) -> Echo {
+    trace_prepared(map, &optics.prepared(), body, origin, dir, max_range, rng)
+}
+
+/// [`trace`] with the optics prepared once for many pulses.
+pub fn trace_prepared(
+    map: &WorldMap,
+    prepared: &PreparedOptics,
+    body: Option<Disc>,
+    origin: [f64; 3],
+    dir: [f64; 3],
+    max_range: f64,
+    rng: &mut SimRng,
+) -> Echo {
+    let optics = &prepared.optics;
     let mut travelled = 0.0;
     let (mut o, mut d) = (origin, dir);
     for leg in 0..=optics.max_bounces {
@@ -117,14 +153,16 @@ pub fn trace(
         travelled += contact.distance;
         let n = contact.normal;
         let along = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
-        let incidence = (-along).clamp(-1.0, 1.0).acos();
-        if incidence >= optics.grazing {
+        // The cosine of the incidence: larger is nearer the normal.
+        let cos_in = (-along).clamp(-1.0, 1.0);
+        if cos_in <= prepared.cos_grazing {
             return Echo::Lost;
         }
         let hit = [0, 1, 2].map(|k| o[k] + d[k] * contact.distance);
         match contact.material {
             Material::Matte => return Echo::Range(travelled),
             Material::Black => {
+                let incidence = cos_in.acos();
                 let span = optics.black_lost - optics.black_full;
                 let p = if span > 0.0 {
                     ((optics.black_lost - incidence) / span).clamp(0.0, 1.0)
@@ -137,12 +175,16 @@ pub fn trace(
                     Echo::Lost
                 };
             }
-            Material::Glass if incidence < optics.glass_return => return Echo::Range(travelled),
+            Material::Glass if cos_in > prepared.cos_glass_return => {
+                return Echo::Range(travelled);
+            }
             Material::Glass if rng.random_bool(optics.glass_transparent) => {
                 // Through the pane: go on from just beyond it.
                 o = [0, 1, 2].map(|k| hit[k] + d[k] * NUDGE);
             }
-            Material::Metal if incidence < optics.metal_return => return Echo::Range(travelled),
+            Material::Metal if cos_in > prepared.cos_metal_return => {
+                return Echo::Range(travelled);
+            }
             Material::Glass | Material::Metal => {
                 // Specular reflection, leaving from just in front of the surface.
                 d = [0, 1, 2].map(|k| d[k] - 2.0 * along * n[k]);
@@ -169,7 +211,7 @@ fn first_contact(
         material: hit.material,
     });
     let Some(disc) = body else { return wall };
-    let horizontal = dir[0].hypot(dir[1]);
+    let horizontal = (dir[0] * dir[0] + dir[1] * dir[1]).sqrt();
     if horizontal < 1e-12 {
         return wall;
     }

@@ -9,11 +9,13 @@
 //!
 //! A reading with nothing coming back within range is the maximum (32 m).
 //!
-//! Timing follows the device: the mirror sweeps a scan in `sweep_s`, and in continuous mode the
-//! LMS sends each scan as a telegram of `telegram_bytes` over its serial line. At 38400 bps a
-//! 732-byte telegram takes 190.6 ms, longer than the sweep, so the line sets the scan rate:
-//! one scan every max(sweep, transfer), delivered a transfer time after it was measured.
-//! All beams of a scan are measured at the scan's stamp.
+//! Timing follows the device: the mirror sweeps a scan in `sweep_s`, back to back, and in
+//! continuous mode the LMS sends a scan as a telegram of `telegram_bytes` over its serial line
+//! once the sweep is complete and the line is free. At 38400 bps a 732-byte telegram takes
+//! 190.6 ms, longer than the 26.7 ms sweep, so the line sets the rate: when a telegram ends, the
+//! next one carries the latest complete sweep. Scans are therefore 7 or 8 sweeps apart (190.6 ms
+//! on average), and each reaches the host at least a sweep plus a transfer after its stamp.
+//! All beams of a scan are measured at the scan's stamp, the start of its sweep.
 
 pub mod beam;
 pub mod outliers;
@@ -31,20 +33,44 @@ use robot::{Pose2, Stamp};
 /// When scans are taken and when they reach the host.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 pub struct LaserTiming {
-    /// Time between two scans.
-    pub period: Duration,
-    /// Time from a scan's measurement to its arrival at the host.
-    pub latency: Duration,
+    /// Time the mirror takes for one scan; sweeps follow each other from time zero.
+    pub sweep: Duration,
+    /// Time one telegram takes on the serial line.
+    pub transfer: Duration,
 }
 
 impl LaserTiming {
     /// The timing of a laser that sweeps in `sweep` and sends `telegram_bytes` at `baud`.
     pub fn new(sweep: Duration, telegram_bytes: u32, baud: u32) -> Self {
-        let transfer = robot::protocol::serial_time(telegram_bytes as usize, baud);
         LaserTiming {
-            period: sweep.max(transfer),
-            latency: transfer,
+            sweep: sweep.max(Duration::from_nanos(1)),
+            transfer: robot::protocol::serial_time(telegram_bytes as usize, baud),
         }
+    }
+
+    /// Mean time between scans: the sweep or the transfer, whichever is longer.
+    pub fn mean_period(&self) -> Duration {
+        self.sweep.max(self.transfer)
+    }
+
+    /// The stamp of the first scan sent: the sweep that starts one sweep after power-on.
+    pub fn first_scan(&self) -> Stamp {
+        Stamp::ZERO + self.sweep
+    }
+
+    /// When the telegram of the scan stamped `stamp` reaches the host, the line being free from
+    /// `line_free`: it is sent when the sweep is complete and the line is free.
+    pub fn delivery(&self, stamp: Stamp, line_free: Stamp) -> Stamp {
+        (stamp + self.sweep).max(line_free) + self.transfer
+    }
+
+    /// The stamp of the scan sent after the one stamped `stamp`, the line being free again at
+    /// `line_free`: the latest sweep complete by then, or the next sweep if none is newer.
+    pub fn next_scan(&self, stamp: Stamp, line_free: Stamp) -> Stamp {
+        let sweep = self.sweep.as_nanos() as u64;
+        let complete = line_free.0 / sweep;
+        let latest = Stamp(complete.saturating_sub(1) * sweep);
+        latest.max(stamp + self.sweep)
     }
 }
 
@@ -75,6 +101,23 @@ impl LaserFrame {
         let d = self.direction(angle);
         [0, 1, 2].map(|k| self.origin[k] + d[k] * range)
     }
+
+    /// The laser's pose in the plane relative to a base at `base`: its optical centre and
+    /// heading in the base frame.
+    pub fn mount_on(&self, base: Pose2) -> Pose2 {
+        base.relative(&Pose2::new(self.origin[0], self.origin[1], self.yaw))
+    }
+
+    /// The same frame on the base when the base is at `to` instead of `from` (to draw a scan
+    /// where odometry puts the robot).
+    pub fn carried(&self, from: Pose2, to: Pose2) -> LaserFrame {
+        let at = to.compose(&self.mount_on(from));
+        LaserFrame {
+            origin: [at.x, at.y, self.origin[2]],
+            yaw: at.theta,
+            tilt: self.tilt,
+        }
+    }
 }
 
 /// A laser model: geometry, noise and timing.
@@ -89,8 +132,8 @@ pub struct LaserModel {
     sigma_m: f64,
     outliers: Outliers,
     timing: LaserTiming,
-    /// Angle of each beam in the scan plane.
-    angles: Vec<f64>,
+    /// Sine and cosine of each beam's angle.
+    beam_trig: Vec<(f64, f64)>,
 }
 
 impl LaserModel {
@@ -101,7 +144,7 @@ impl LaserModel {
         let fov = desc.fov_deg.get().to_radians();
         let angle_min = -fov / 2.0;
         let angle_increment = fov / (beams - 1) as f64;
-        let angles = (0..beams)
+        let angles: Vec<f64> = (0..beams)
             .map(|i| angle_min + i as f64 * angle_increment)
             .collect();
         LaserModel {
@@ -118,7 +161,7 @@ impl LaserModel {
                 desc.telegram_bytes,
                 desc.baud,
             ),
-            angles,
+            beam_trig: angles.iter().map(|a| a.sin_cos()).collect(),
         }
     }
 
@@ -127,7 +170,7 @@ impl LaserModel {
         self.mount
     }
 
-    /// Scan period and delivery latency.
+    /// Sweep and transfer times.
     pub fn timing(&self) -> LaserTiming {
         self.timing
     }
@@ -157,14 +200,19 @@ impl LaserModel {
         stamp: Stamp,
         rng: &mut SimRng,
     ) -> LaserScan {
+        let optics = map.optics().prepared();
+        let (st, ct) = frame.tilt.sin_cos();
+        let (sy, cy) = frame.yaw.sin_cos();
         let ranges_mm = self
-            .angles
+            .beam_trig
             .iter()
-            .map(|&angle| {
-                let dir = frame.direction(angle);
-                let echo = beam::trace(
+            .map(|&(sa, ca)| {
+                // `LaserFrame::direction`, with the scan's sines and cosines taken once.
+                let (x, y, z) = (ca * ct, sa, ca * st);
+                let dir = [cy * x - sy * y, sy * x + cy * y, z];
+                let echo = beam::trace_prepared(
                     map,
-                    map.optics(),
+                    &optics,
                     body,
                     frame.origin,
                     dir,
@@ -291,12 +339,35 @@ points = [[-1, -2], [40, -2]]
     #[test]
     fn timing_is_set_by_the_serial_line() {
         let t = lms(0.0).timing();
-        assert_eq!(t.latency, Duration::from_nanos(190_625_000));
-        assert_eq!(t.period, t.latency);
+        assert_eq!(t.transfer, Duration::from_nanos(190_625_000));
+        assert_eq!(t.mean_period(), t.transfer);
+        // Back-to-back telegrams: stamps fall on sweep starts, 7 or 8 sweeps apart, and average
+        // to the transfer time.
+        let sweep = t.sweep.as_nanos() as u64;
+        let (mut stamp, mut line_free) = (t.first_scan(), Stamp::ZERO);
+        let first = stamp;
+        for _ in 0..100 {
+            let delivery = t.delivery(stamp, line_free);
+            assert!(delivery >= stamp + t.sweep + t.transfer);
+            line_free = delivery;
+            let next = t.next_scan(stamp, line_free);
+            let gap = (next.0 - stamp.0) / sweep;
+            assert_eq!((next.0 - stamp.0) % sweep, 0);
+            assert!(gap == 7 || gap == 8, "{gap} sweeps");
+            stamp = next;
+        }
+        let mean = (stamp.0 - first.0) as f64 / 100.0;
+        assert!(
+            (mean - 190_625_000.0).abs() < sweep as f64 / 100.0 + 1.0,
+            "{mean}"
+        );
         let fast = LaserTiming::new(Duration::from_micros(26_670), 732, 500_000);
         assert_eq!(
-            fast.period,
-            Duration::from_micros(26_670),
+            fast.next_scan(
+                Stamp::ZERO + fast.sweep,
+                fast.delivery(Stamp::ZERO + fast.sweep, Stamp::ZERO)
+            ),
+            Stamp::ZERO + fast.sweep * 2,
             "at 500 kbaud the sweep sets the rate"
         );
     }

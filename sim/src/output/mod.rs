@@ -1,5 +1,5 @@
-//! The files `twin run` writes: trajectories in TUM format, scans as JSON Lines, a summary, and a
-//! picture of the map.
+//! The files `twin run` writes: trajectories in TUM format, scans as JSON Lines, a summary, a
+//! picture of the map, and — when the laser was tilted — a picture of a tilted scan.
 //!
 //! Everything but `summary.json` (which reports wall-clock time) is a pure function of the
 //! scenario and the seed: numbers are printed with fixed precision, so two runs give the same
@@ -9,12 +9,14 @@ mod scans;
 mod sonar;
 mod summary;
 mod svg;
+mod tilted;
 mod tum;
 
 pub use scans::{ScanLine, write_scans};
 pub use sonar::write_sonar;
 pub use summary::Summary;
 pub use svg::write_map_svg;
+pub use tilted::{last_tilted, write_tilted_svg};
 pub use tum::write_tum;
 
 use crate::config::Scenario;
@@ -47,13 +49,21 @@ pub fn write_all(record: &RunRecord, scenario: &Scenario, dir: &Path) -> std::io
         &file("odometry.tum"),
         record.scans.iter().map(|r| (r.scan.stamp, r.odometry)),
     )?;
-    write_scans(&file("scans.jsonl"), &record.scans, record.laser_mount)?;
+    write_scans(&file("scans.jsonl"), &record.scans)?;
     Summary::of(record, (&scenario.world.name, &scenario.robot.name))
         .write(&file("summary.json"))?;
     if let Some(sonar) = &record.sonar {
         write_sonar(&file("sonar.json"), sonar)?;
     }
     write_map_svg(&file("map.svg"), record, &scenario.world)?;
+    if let Some(scan) = last_tilted(record) {
+        write_tilted_svg(
+            &file("tilted-scan.svg"),
+            scan,
+            &scenario.world,
+            &record.scenario,
+        )?;
+    }
     Ok(Written {
         dir: dir.to_path_buf(),
         files,

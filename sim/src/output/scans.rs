@@ -1,7 +1,6 @@
 //! Scans as JSON Lines, one object per scan, in the shape later tools read.
 
 use crate::run::ScanRecord;
-use robot::Pose2;
 use serde::Serialize;
 use std::io::{BufWriter, Write};
 use std::path::Path;
@@ -9,8 +8,10 @@ use std::path::Path;
 /// One line of `scans.jsonl`.
 ///
 /// Ranges are metres; a range `>= range_max` means no return. Angles are in the laser frame
-/// (x forward, y left). `odometry` is the robot's `[x, y, theta]` at the scan's time, and
-/// `laser_mount` the laser's `[x, y, theta]` on the robot.
+/// (x forward, y left). `odometry` is the robot's `[x, y, theta]` at the scan's time,
+/// `laser_mount` the laser's `[x, y, theta]` on the robot at that time (panned, on a pan-tilt),
+/// `laser_z` the height of its optical centre and `laser_tilt` the tilt of its scan plane (radians,
+/// positive when the forward beams rise).
 #[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct ScanLine {
     /// Time of the scan, seconds.
@@ -27,12 +28,17 @@ pub struct ScanLine {
     pub odometry: [f64; 3],
     /// The laser's pose on the base, `[x, y, theta]`.
     pub laser_mount: [f64; 3],
+    /// Height of the laser's optical centre above the floor, metres.
+    pub laser_z: f64,
+    /// Tilt of the scan plane, radians.
+    pub laser_tilt: f64,
 }
 
 impl ScanLine {
-    /// The line for a recorded scan by a laser mounted at `mount`.
-    pub fn of(record: &ScanRecord, mount: Pose2) -> Self {
+    /// The line for a recorded scan.
+    pub fn of(record: &ScanRecord) -> Self {
         let s = &record.scan;
+        let mount = record.frame.mount_on(record.truth);
         ScanLine {
             t: s.stamp.secs_f64(),
             angle_min: s.angle_min,
@@ -45,15 +51,17 @@ impl ScanLine {
                 .collect(),
             odometry: [record.odometry.x, record.odometry.y, record.odometry.theta],
             laser_mount: [mount.x, mount.y, mount.theta],
+            laser_z: record.frame.origin[2],
+            laser_tilt: record.frame.tilt,
         }
     }
 }
 
 /// Writes one JSON object per scan.
-pub fn write_scans(path: &Path, records: &[ScanRecord], mount: Pose2) -> std::io::Result<()> {
+pub fn write_scans(path: &Path, records: &[ScanRecord]) -> std::io::Result<()> {
     let mut out = BufWriter::new(std::fs::File::create(path)?);
     for r in records {
-        serde_json::to_writer(&mut out, &ScanLine::of(r, mount))?;
+        serde_json::to_writer(&mut out, &ScanLine::of(r))?;
         out.write_all(b"\n")?;
     }
     out.flush()

@@ -18,6 +18,8 @@ const MAX_POINTS: usize = 60_000;
 const LEGEND_COLUMN: f64 = 280.0;
 /// How far from every surface a point must be to count as a ghost, metres.
 const GHOST_MARGIN: f64 = 0.15;
+/// Points lower than this (metres) hit the floor.
+const FLOOR_BAND: f64 = 0.03;
 /// The legend's entries.
 const LEGEND: [(&str, &str); 6] = [
     ("#1a9850", "true path"),
@@ -27,6 +29,8 @@ const LEGEND: [(&str, &str); 6] = [
     ("#e0115f", "ghosts: no surface there"),
     ("#c9c9c9", "walls (blue glass, violet metal)"),
 ];
+/// The legend's entry for floor hits, shown when a tilted laser made some.
+const FLOOR_LEGEND: (&str, &str) = ("#2ca25f", "floor hits (tilted laser)");
 
 /// Writes the map picture.
 pub fn write_map_svg(
@@ -58,9 +62,15 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
         max = [max[0].max(p.x), max[1].max(p.y)];
     }
     let f = Frame { min, max };
+    let map = WorldMap::new(world);
+    let points = classify_points(record, &map);
+    let mut legend = LEGEND.to_vec();
+    if !points.floor.is_empty() {
+        legend.push(FLOOR_LEGEND);
+    }
     let width = ((max[0] - min[0] + 2.0 * MARGIN) * SCALE).max(LEGEND_COLUMN + 24.0);
     let columns = (((width - 24.0) / LEGEND_COLUMN).floor() as usize).clamp(1, 3);
-    let legend_rows = LEGEND.len().div_ceil(columns);
+    let legend_rows = legend.len().div_ceil(columns);
     let legend_height = 20.0 * legend_rows as f64 + 50.0;
     let height = (max[1] - min[1] + 2.0 * MARGIN) * SCALE + legend_height;
     let mut s = String::new();
@@ -100,32 +110,19 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
 
     // Scans drawn from the true pose (what is there, with the laser's noise) and from odometry.
     // A point where there is no surface — a mirror image off glass or metal, or an outlier — is
-    // a ghost, drawn apart.
-    let map = WorldMap::new(world);
-    let total: usize = record.scans.iter().map(|r| r.scan.len()).sum();
-    let stride = total.div_ceil(MAX_POINTS).max(1);
-    let (mut seen, mut ghosts, mut drifted) = (String::new(), String::new(), String::new());
-    let mut k = 0usize;
-    for r in &record.scans {
-        let truth = r.truth.compose(&record.laser_mount);
-        let odometry = r.odometry.compose(&record.laser_mount);
-        for (_, (lx, ly)) in r.scan.points() {
-            k += 1;
-            if !k.is_multiple_of(stride) {
-                continue;
-            }
-            let (x, y) = truth.transform_point(lx, ly);
-            let ghost = map.clearance([x, y]) > GHOST_MARGIN;
-            let target = if ghost { &mut ghosts } else { &mut seen };
-            let _ = write!(target, "M{:.1} {:.1}h0", f.x(x), f.y(y));
-            let (x, y) = odometry.transform_point(lx, ly);
-            let _ = write!(drifted, "M{:.1} {:.1}h0", f.x(x), f.y(y));
+    // a ghost, drawn apart; so are the floor hits of a tilted laser.
+    let dots = |points: &[[f64; 3]]| {
+        let mut d = String::new();
+        for p in points {
+            let _ = write!(d, "M{:.1} {:.1}h0", f.x(p[0]), f.y(p[1]));
         }
-    }
+        d
+    };
     for (d, colour, label) in [
-        (&drifted, "#f08a24", "scans at odometry"),
-        (&seen, "#1f3b73", "scans at true pose"),
-        (&ghosts, "#e0115f", "ghosts: no surface there"),
+        (dots(&points.drifted), "#f08a24", "scans at odometry"),
+        (dots(&points.seen), "#1f3b73", "scans at true pose"),
+        (dots(&points.floor), FLOOR_LEGEND.0, FLOOR_LEGEND.1),
+        (dots(&points.ghosts), "#e0115f", "ghosts: no surface there"),
     ] {
         let _ = writeln!(
             s,
@@ -193,7 +190,7 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
 
     // Legend, figures and scale bar.
     let top = height - legend_height + 8.0;
-    for (i, (colour, label)) in LEGEND.iter().enumerate() {
+    for (i, (colour, label)) in legend.iter().enumerate() {
         let x = 12.0 + LEGEND_COLUMN * (i % columns) as f64;
         let y = top + 20.0 * (i / columns) as f64;
         let _ = writeln!(
@@ -231,6 +228,52 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
     );
     s.push_str("</svg>\n");
     s
+}
+
+/// The scans' points in the world, sorted by what they hit.
+#[derive(Default)]
+struct ScanPoints {
+    /// Placed at the true pose, on a surface.
+    seen: Vec<[f64; 3]>,
+    /// Placed at the true pose, on the floor.
+    floor: Vec<[f64; 3]>,
+    /// Placed at the true pose, far from every surface.
+    ghosts: Vec<[f64; 3]>,
+    /// Placed at the odometry pose.
+    drifted: Vec<[f64; 3]>,
+}
+
+/// Every returned beam of the run (thinned to [`MAX_POINTS`]) as world points, from the laser's
+/// true 3D frame and from where odometry puts it.
+fn classify_points(record: &RunRecord, map: &WorldMap) -> ScanPoints {
+    let total: usize = record.scans.iter().map(|r| r.scan.len()).sum();
+    let stride = total.div_ceil(MAX_POINTS).max(1);
+    let mut out = ScanPoints::default();
+    let mut k = 0usize;
+    for r in &record.scans {
+        let at_odometry = r.frame.carried(r.truth, r.odometry);
+        for i in 0..r.scan.len() {
+            let Some(range) = r.scan.range_m(i) else {
+                continue;
+            };
+            k += 1;
+            if !k.is_multiple_of(stride) {
+                continue;
+            }
+            let angle = r.scan.angle(i);
+            let p = r.frame.point(angle, range);
+            let target = if map.distance_3d(p) > GHOST_MARGIN {
+                &mut out.ghosts
+            } else if p[2] < FLOOR_BAND {
+                &mut out.floor
+            } else {
+                &mut out.seen
+            };
+            target.push(p);
+            out.drifted.push(at_odometry.point(angle, range));
+        }
+    }
+    out
 }
 
 fn xml_escape(text: &str) -> String {

@@ -2,9 +2,10 @@
 //! robot entity.
 
 use crate::battery::Electrics;
-use crate::firmware::BaseBoard;
-use crate::laser::LaserModel;
+use crate::firmware::{BaseBoard, PanTiltFirmware};
+use crate::laser::{LaserFrame, LaserModel};
 use crate::motor::Motor;
+use crate::pan_tilt::{HeadAngles, PanTiltHead};
 use crate::rng::SimRng;
 use crate::sonar::SonarModel;
 use crate::world_map::WorldMap;
@@ -134,6 +135,8 @@ pub struct PendingScan {
     pub delivery: Stamp,
     /// The base's true pose at `stamp`.
     pub base: Pose2,
+    /// The laser's true frame at `stamp`.
+    pub frame: LaserFrame,
     /// The scan's number since power-on.
     pub index: u64,
 }
@@ -147,6 +150,8 @@ pub struct Lidar {
     pub stream_seed: u64,
     /// When the next scan is measured.
     pub next_due: Stamp,
+    /// When the serial line finishes the telegram it is sending.
+    pub line_free: Stamp,
     /// Number of the next scan.
     pub next_index: u64,
     /// Scans measured and not yet taken by the host.
@@ -164,4 +169,42 @@ pub struct Sonars {
     pub shots: u64,
     /// When the reading of each position of the firing sequence was stored.
     pub measured: [Option<Stamp>; 16],
+}
+
+/// The pan-tilt unit a robot's laser rides on: its microcontroller board and the head it drives.
+#[derive(Component)]
+pub struct PanTiltUnit {
+    /// The pan-tilt microcontroller with its serial port.
+    pub board: crate::firmware::Board<PanTiltFirmware>,
+    /// Motors, encoders, switches and the laser's geometry.
+    pub head: PanTiltHead,
+    /// The head's angles at the end of every step (and at time zero), oldest first.
+    pub history: Vec<(Stamp, HeadAngles)>,
+}
+
+impl PanTiltUnit {
+    /// The head's angles at `t`, interpolated between steps (clamped to the simulated time).
+    pub fn angles_at(&self, t: Stamp) -> HeadAngles {
+        let i = self.history.partition_point(|(s, _)| *s < t);
+        match (
+            i.checked_sub(1).map(|j| self.history[j]),
+            self.history.get(i),
+        ) {
+            (_, Some(&(s1, a1))) if s1 == t => a1,
+            (Some((s0, a0)), Some(&(s1, a1))) => {
+                a0.interpolate(&a1, (t.0 - s0.0) as f64 / (s1.0 - s0.0) as f64)
+            }
+            (Some((_, a)), None) | (None, Some(&(_, a))) => a,
+            (None, None) => self.head.angles(),
+        }
+    }
+}
+
+/// Where a robot's laser looks with the base at `base` at time `t`: on its fixed mount, or on
+/// the pan-tilt head.
+pub fn laser_frame(lidar: &Lidar, unit: Option<&PanTiltUnit>, base: Pose2, t: Stamp) -> LaserFrame {
+    match unit {
+        Some(unit) => unit.head.laser_frame(base, unit.angles_at(t)),
+        None => lidar.model.frame_on(base),
+    }
 }

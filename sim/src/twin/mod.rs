@@ -2,8 +2,9 @@
 //!
 //! Resources hold what is shared — the clock, the rapier world, the static map — and a robot is an
 //! entity whose components are its parts: the base microcontroller board, the drive train, the
-//! traction on the floor, the batteries, the chassis body, its true trajectory and its laser.
-//! The schedule runs with the single-threaded executor and refuses ambiguous system order, so two
+//! traction on the floor, the batteries, the chassis body, its true trajectory and its laser —
+//! and, when the robot has them, its sonar ring and its pan-tilt unit (a second microcontroller
+//! board and the head it drives, which carries the laser). The schedule runs with the single-threaded executor and refuses ambiguous system order, so two
 //! runs with the same seed are bit-identical.
 //!
 //! One step is [`STEP`] = 8 firmware ticks (8.192 ms): inside it the firmware and motors run
@@ -16,10 +17,11 @@ pub use components::{STEP, TICK, TICKS_PER_STEP};
 
 use crate::battery::Electrics;
 use crate::config::{ConfigError, NoiseSettings, RobotDescription, WorldDescription};
-use crate::firmware::{BaseBoard, BaseFirmware};
-use crate::laser::LaserModel;
+use crate::firmware::{BaseBoard, BaseFirmware, Board as McuBoard, PanTiltFirmware};
 use crate::laser::beam::Disc;
+use crate::laser::{LaserFrame, LaserModel};
 use crate::motor::{Motor, MotorParams};
+use crate::pan_tilt::{HeadAngles, PanTiltHead};
 use crate::rng;
 use crate::sonar::SonarModel;
 use crate::world_map::WorldMap;
@@ -159,7 +161,8 @@ impl Twin {
                 },
                 Trajectory::starting_at(start),
                 Lidar {
-                    next_due: Stamp::ZERO + laser.timing().period,
+                    next_due: laser.timing().first_scan(),
+                    line_free: Stamp::ZERO,
                     next_index: 0,
                     model: laser,
                     stream_seed: rng::stream_seed(seed, "laser"),
@@ -173,6 +176,14 @@ impl Twin {
                 stream_seed: rng::stream_seed(seed, "sonar"),
                 shots: 0,
                 measured: [None; 16],
+            });
+        }
+        if let Some(pt) = &robot_desc.pan_tilt {
+            let head = PanTiltHead::new(pt);
+            world.entity_mut(robot).insert(PanTiltUnit {
+                board: McuBoard::new(head.power_on_firmware(), pt.serial_baud),
+                history: vec![(Stamp::ZERO, head.angles())],
+                head,
             });
         }
 
@@ -189,6 +200,7 @@ impl Twin {
                 systems::drive_chassis,
                 systems::step_physics,
                 systems::track_pose,
+                systems::run_pan_tilt,
                 systems::sense_lasers,
             )
                 .chain(),
@@ -275,10 +287,9 @@ impl Twin {
             height: chassis.height,
         };
         let mut rng = rng::substream(lidar.stream_seed, pending.index);
-        let frame = lidar.model.frame_on(pending.base);
         let scan = lidar
             .model
-            .scan(map, Some(body), frame, pending.stamp, &mut rng);
+            .scan(map, Some(body), pending.frame, pending.stamp, &mut rng);
         Some((pending.delivery, scan))
     }
 
@@ -296,6 +307,42 @@ impl Twin {
     /// The laser model.
     pub fn laser(&self) -> &LaserModel {
         &self.component::<Lidar>().model
+    }
+
+    /// The laser's true frame at `t` (on its fixed mount or on the pan-tilt head), or `None`
+    /// outside the simulated time.
+    pub fn laser_frame_at(&self, t: Stamp) -> Option<LaserFrame> {
+        let base = self.true_pose_at(t)?;
+        Some(laser_frame(
+            self.component::<Lidar>(),
+            self.world.get::<PanTiltUnit>(self.robot),
+            base,
+            t,
+        ))
+    }
+
+    /// The pan-tilt microcontroller board, if the robot has a pan-tilt.
+    pub fn pan_tilt_board(&self) -> Option<&McuBoard<PanTiltFirmware>> {
+        self.world.get::<PanTiltUnit>(self.robot).map(|u| &u.board)
+    }
+
+    /// The pan-tilt microcontroller board, to send it bytes and read its replies.
+    pub fn pan_tilt_board_mut(&mut self) -> Option<&mut McuBoard<PanTiltFirmware>> {
+        self.world
+            .get_mut::<PanTiltUnit>(self.robot)
+            .map(|u| &mut u.into_inner().board)
+    }
+
+    /// The pan-tilt head, if the robot has one.
+    pub fn pan_tilt_head(&self) -> Option<&PanTiltHead> {
+        self.world.get::<PanTiltUnit>(self.robot).map(|u| &u.head)
+    }
+
+    /// The pan-tilt head's true angles at `t`, if the robot has one.
+    pub fn head_angles_at(&self, t: Stamp) -> Option<HeadAngles> {
+        self.world
+            .get::<PanTiltUnit>(self.robot)
+            .map(|u| u.angles_at(t))
     }
 
     /// The true pose of the base now.

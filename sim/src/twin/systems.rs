@@ -7,8 +7,10 @@
 //!    random slip) and a velocity for the base's rigid body;
 //! 4. [`step_physics`] — rapier moves the body and stops it at walls;
 //! 5. [`track_pose`] — the true pose is recorded and contacts counted;
-//! 6. [`sense_lasers`] — scans due within the step are recorded with the interpolated pose (their
-//!    beams are cast when the host takes them).
+//! 6. [`run_pan_tilt`] — tick by tick: the pan-tilt's motors turn, its encoders, index pulses
+//!    and switches interrupt its microcontroller, whose main loop runs;
+//! 7. [`sense_lasers`] — scans due within the step are recorded with the interpolated pose and
+//!    laser frame (their beams are cast when the host takes them).
 
 use super::components::*;
 use bevy_ecs::prelude::*;
@@ -50,9 +52,11 @@ pub fn run_drive_electronics(
             power.0.draw(left.supply_current + right.supply_current, dt);
             let adc = power.0.adc();
             let (l, r) = (&mut drive.left, &mut drive.right);
-            board
-                .0
-                .tick(tick_time, adc, || (l.take_edges(), r.take_edges()));
+            board.0.tick(
+                tick_time,
+                |fw| fw.rti_interrupt(adc),
+                |fw| fw.latch_encoders(l.take_edges(), r.take_edges()),
+            );
             if let Some(sonars) = sonars.as_deref_mut() {
                 listen_for_echoes(&mut board.0, sonars, &map.0, path.current.1, tick_time);
             }
@@ -165,9 +169,32 @@ pub fn track_pose(
     }
 }
 
-/// Records the scans that fell due during the step, with the pose at their exact time.
-pub fn sense_lasers(clock: Res<SimClock>, mut robots: Query<(&Trajectory, &mut Lidar)>) {
-    for (path, mut lidar) in &mut robots {
+/// Runs each robot's pan-tilt microcontroller and head through the step's ticks.
+pub fn run_pan_tilt(clock: Res<SimClock>, mut robots: Query<(&mut PanTiltUnit, &mut Power)>) {
+    let dt = TICK.as_secs_f64();
+    for (mut unit, mut power) in &mut robots {
+        let unit = &mut *unit;
+        let mut tick_time = clock.step_start;
+        for _ in 0..TICKS_PER_STEP {
+            tick_time += TICK;
+            let supply = power.0.motor_supply_v();
+            let head = &mut unit.head;
+            let mut current = 0.0;
+            unit.board
+                .tick(tick_time, |fw| current = head.tick(fw, supply, dt), |_| {});
+            power.0.draw(current, dt);
+        }
+        unit.history.push((clock.now, unit.head.angles()));
+    }
+}
+
+/// Records the scans that fell due during the step, with the pose and laser frame at their
+/// exact time.
+pub fn sense_lasers(
+    clock: Res<SimClock>,
+    mut robots: Query<(&Trajectory, &mut Lidar, Option<&PanTiltUnit>)>,
+) {
+    for (path, mut lidar, unit) in &mut robots {
         let lidar = &mut *lidar;
         let timing = lidar.model.timing();
         while lidar.next_due <= clock.now {
@@ -179,14 +206,19 @@ pub fn sense_lasers(clock: Res<SimClock>, mut robots: Query<(&Trajectory, &mut L
             } else {
                 1.0
             };
+            let base = p0.interpolate(&p1, s);
+            let frame = laser_frame(lidar, unit, base, t);
+            let delivery = timing.delivery(t, lidar.line_free);
+            lidar.line_free = delivery;
             lidar.outbox.push_back(PendingScan {
                 stamp: t,
-                delivery: t + timing.latency,
-                base: p0.interpolate(&p1, s),
+                delivery,
+                base,
+                frame,
                 index: lidar.next_index,
             });
             lidar.next_index += 1;
-            lidar.next_due += timing.period;
+            lidar.next_due = timing.next_scan(t, lidar.line_free);
         }
     }
 }
@@ -224,7 +256,7 @@ mod tests {
             0.0,
             crate::laser::outliers::Outliers::NONE,
         );
-        let latency = model.timing().latency;
+        let timing = model.timing();
         let mut world = World::new();
         world.insert_resource(SimClock {
             step_start: Stamp::from_millis(100),
@@ -240,6 +272,7 @@ mod tests {
                     model,
                     stream_seed: 1,
                     next_due: Stamp::from_millis(104),
+                    line_free: Stamp::ZERO,
                     next_index: 7,
                     outbox: VecDeque::new(),
                 },
@@ -250,7 +283,10 @@ mod tests {
         assert_eq!(lidar.outbox.len(), 1);
         let scan = lidar.outbox[0];
         assert_eq!(scan.stamp, Stamp::from_millis(104));
-        assert_eq!(scan.delivery, Stamp::from_millis(104) + latency);
+        assert_eq!(
+            scan.delivery,
+            Stamp::from_millis(104) + timing.sweep + timing.transfer
+        );
         assert_eq!(scan.index, 7);
         assert!((scan.base.x - 1.4).abs() < 1e-12 && (scan.base.theta - 0.08).abs() < 1e-12);
         assert_eq!(lidar.next_index, 8);
