@@ -25,6 +25,18 @@ fn scan_since(robot: &mut SimRobot, since: Stamp) -> LaserScan {
         .expect("the laser sends scans")
 }
 
+/// Moves the head to `pan`, `tilt`, waits until it has stopped there, and returns the first
+/// scan measured after that.
+fn scan_at(robot: &mut SimRobot, pan: u8, tilt: u8) -> LaserScan {
+    let status = robot
+        .move_pan_tilt_to(PanTiltPosition { pan, tilt }, 20, 1000)
+        .unwrap();
+    assert!(status.idle(), "{status:?}");
+    assert_eq!((status.pan, status.tilt), (i16::from(pan), i16::from(tilt)));
+    let now = robot.host_time();
+    scan_since(robot, now)
+}
+
 fn homed(seed: u64) -> SimRobot {
     let mut robot = thesis_in(&big_room(), NoiseSettings::NONE, seed);
     robot.wait_pan_tilt_ready().unwrap();
@@ -238,21 +250,7 @@ fn out_of_range_positions_are_refused_before_sending() {
 fn the_laser_pans_with_the_head() {
     // Pan 64 positions (90.7°) left: the middle beam looks at the wall at y = 10.
     let mut robot = homed(6);
-    let status = robot
-        .move_pan_tilt_to(
-            PanTiltPosition {
-                pan: 64,
-                tilt: LEVEL,
-            },
-            20,
-            1000,
-        )
-        .unwrap();
-    assert!(status.idle());
-    let scan = {
-        let now = robot.host_time();
-        scan_since(&mut robot, now)
-    };
+    let scan = scan_at(&mut robot, 64, LEVEL);
     let frame = robot.laser_frame_at(scan.stamp).unwrap();
     let expected = (10.0 - frame.origin[1]) / frame.yaw.sin();
     assert!(
@@ -354,21 +352,7 @@ fn the_level_laser_sees_exactly_what_the_2d_model_saw() {
     let world = room(false, true);
     let mut robot = thesis_in(&world, NoiseSettings::NONE, 8);
     robot.wait_pan_tilt_ready().unwrap();
-    let status = robot
-        .move_pan_tilt_to(
-            PanTiltPosition {
-                pan: 0,
-                tilt: LEVEL,
-            },
-            20,
-            1000,
-        )
-        .unwrap();
-    assert!(status.idle());
-    let levelled = {
-        let now = robot.host_time();
-        scan_since(&mut robot, now)
-    };
+    let levelled = scan_at(&mut robot, 0, LEVEL);
     let frame = robot.laser_frame_at(levelled.stamp).unwrap();
     assert!(frame.tilt.abs() < 0.1f64.to_radians(), "{}", frame.tilt);
     let flat_frame = sim::laser::LaserFrame { tilt: 0.0, ..frame };
@@ -389,13 +373,7 @@ fn the_level_laser_sees_exactly_what_the_2d_model_saw() {
         .unwrap();
     assert!(worst <= 1, "worst difference {worst} mm");
     // Tilted 17° down, the same laser now sees the low box's face 1.8 m ahead, at 0.5 m.
-    robot
-        .move_pan_tilt_to(PanTiltPosition { pan: 0, tilt: 5 }, 20, 1000)
-        .unwrap();
-    let tilted = {
-        let now = robot.host_time();
-        scan_since(&mut robot, now)
-    };
+    let tilted = scan_at(&mut robot, 0, 5);
     let frame = robot.laser_frame_at(tilted.stamp).unwrap();
     let box_face = (1.8 - frame.origin[0]) / frame.tilt.cos();
     let got = tilted.range_m(180).unwrap();

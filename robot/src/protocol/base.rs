@@ -214,11 +214,8 @@ pub fn parse_status(line: &str, stamp: Stamp) -> Result<DriveStatus, ReplyError>
         expected,
         got: line.strip_suffix('\n').unwrap_or(line).to_string(),
     };
-    let body = line
-        .strip_suffix('\n')
-        .and_then(|l| l.strip_prefix('l'))
-        .ok_or_else(|| bad("a line `l…` ending in a newline"))?;
-    let fields: Vec<&str> = body.split(' ').collect();
+    let fields =
+        super::reply_fields(line, 'l').ok_or_else(|| bad("a line `l…` ending in a newline"))?;
     let [left, right, el, er, es] = fields[..] else {
         return Err(bad("five fields `Ci Cd Ei Ed Es`"));
     };
@@ -234,11 +231,7 @@ pub fn parse_status(line: &str, stamp: Stamp) -> Result<DriveStatus, ReplyError>
             parse_digits(hundredths).ok_or_else(|| bad("counters as turns.hh"))?;
         Ok(u32::from(turns) * 100 + u32::from(hundredths))
     };
-    let flag = |f: &str| match f {
-        "0" => Ok(false),
-        "1" => Ok(true),
-        _ => Err(bad("motor and sonar flags 0 or 1")),
-    };
+    let flag = |f: &str| super::parse_flag(f).ok_or_else(|| bad("motor and sonar flags 0 or 1"));
     Ok(DriveStatus {
         stamp,
         left_counts: counts(left)?,
@@ -263,12 +256,9 @@ pub fn parse_battery(line: &str, stamp: Stamp) -> Result<BatteryVoltages, ReplyE
         expected: "`t` and four millivolt values",
         got: line.strip_suffix('\n').unwrap_or(line).to_string(),
     };
-    let body = line
-        .strip_suffix('\n')
-        .and_then(|l| l.strip_prefix('t'))
-        .ok_or_else(bad)?;
-    let values: Vec<u16> = body
-        .split(' ')
+    let values: Vec<u16> = super::reply_fields(line, 't')
+        .ok_or_else(bad)?
+        .into_iter()
         .map(|f| parse_digits(f).ok_or_else(bad))
         .collect::<Result<_, _>>()?;
     let [logic_12_mv, logic_24_mv, motor_12_mv, motor_24_mv] = values[..] else {

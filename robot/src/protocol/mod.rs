@@ -25,3 +25,18 @@ pub fn serial_time(bytes: usize, baud: u32) -> core::time::Duration {
     let nanos = (bytes as u128 * 10 * 1_000_000_000) / u128::from(baud);
     core::time::Duration::from_nanos(nanos as u64)
 }
+
+/// A `0`/`1` flag field of a reply.
+pub(crate) fn parse_flag(field: &str) -> Option<bool> {
+    match field {
+        "0" => Some(false),
+        "1" => Some(true),
+        _ => None,
+    }
+}
+
+/// The fields of a reply line `<letter>f1 f2 …\n`, or `None` without its letter or newline.
+pub(crate) fn reply_fields(line: &str, letter: char) -> Option<Vec<&str>> {
+    let body = line.strip_suffix('\n')?.strip_prefix(letter)?;
+    Some(body.split(' ').collect())
+}

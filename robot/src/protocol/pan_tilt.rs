@@ -77,11 +77,8 @@ pub fn parse_status(line: &str, stamp: Stamp) -> Result<PanTiltStatus, ReplyErro
         expected,
         got: line.strip_suffix('\n').unwrap_or(line).to_string(),
     };
-    let body = line
-        .strip_suffix('\n')
-        .and_then(|l| l.strip_prefix('l'))
-        .ok_or_else(|| bad("a line `l…` ending in a newline"))?;
-    let fields: Vec<&str> = body.split(' ').collect();
+    let fields =
+        super::reply_fields(line, 'l').ok_or_else(|| bad("a line `l…` ending in a newline"))?;
     let [pan, pan_clicks, tilt, tilt_clicks, izq, der, inf, eg, ee] = fields[..] else {
         return Err(bad(
             "nine fields `abs_giro g_giro_clicks abs_elev g_elev_clicks TopeIzq TopeDer TopeInf Eg Ee`",
@@ -95,11 +92,7 @@ pub fn parse_status(line: &str, stamp: Stamp) -> Result<PanTiltStatus, ReplyErro
         f.parse()
             .map_err(|_| bad("positions and clicks in -32768..=32767"))
     };
-    let flag = |f: &str| match f {
-        "0" => Ok(false),
-        "1" => Ok(true),
-        _ => Err(bad("switch and motor flags 0 or 1")),
-    };
+    let flag = |f: &str| super::parse_flag(f).ok_or_else(|| bad("switch and motor flags 0 or 1"));
     Ok(PanTiltStatus {
         stamp,
         pan: number(pan)?,

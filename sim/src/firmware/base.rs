@@ -25,10 +25,9 @@
 //! - `w` honours its flags only when all three are given; with fewer arguments it just waits;
 //! - argument slots not written by the current command keep the values of earlier commands.
 
+use super::MAX_PARAMS;
 use std::fmt::Write as _;
 
-/// Greatest number of argument slots (`static unsigned short param[20]`).
-const MAX_PARAMS: usize = 20;
 /// Greatest number of sonars in a sequence (`MAX_SONARS`).
 pub const MAX_SONARS: usize = 16;
 /// Longest command line the receive buffer holds (`g_command_line[256]`).
@@ -327,39 +326,9 @@ impl BaseFirmware {
 
     // ------------------------------------------------------------------ main.c
 
-    /// `decode_command`: the letter, then decimal arguments split at spaces and the newline.
-    /// Non-digits are folded in as `c - '0'` like the C code does; `\r` is skipped.
+    /// `decode_command` (shared by both firmwares).
     fn decode_command(&mut self, line: &[u8]) -> (u8, i32) {
-        let command = line.first().copied().unwrap_or(0);
-        let mut num_params: usize = 0;
-        self.param[0] = 0;
-        let mut inicio_num = false;
-        for &c in line.iter().skip(1) {
-            match c {
-                b'\r' => continue,
-                b' ' | b'\n' => {
-                    // param[++num_params] = 0 (slots past the C array are dropped)
-                    num_params += 1;
-                    if num_params < MAX_PARAMS {
-                        self.param[num_params] = 0;
-                    }
-                }
-                _ => {
-                    inicio_num = true;
-                    if num_params < MAX_PARAMS {
-                        let p = &mut self.param[num_params];
-                        *p = p
-                            .wrapping_mul(10)
-                            .wrapping_add(u16::from(c).wrapping_sub(u16::from(b'0')));
-                    }
-                }
-            }
-        }
-        let mut n = num_params.min(MAX_PARAMS - 1) as i32;
-        if !inicio_num {
-            n -= 1;
-        }
-        (command, n)
+        super::decode_command(line, &mut self.param)
     }
 
     // ------------------------------------------------------------------ command.c

@@ -20,6 +20,7 @@
 //! - the limit-switch interrupts fire on the switch being pressed (falling edge, `TCTL3`) and stop
 //!   the pan when it moves towards that switch; the tilt's lower switch is polled.
 
+use super::MAX_PARAMS;
 use super::base::HBridge;
 use super::board::MainLoop;
 use std::fmt::Write as _;
@@ -30,7 +31,6 @@ const OFFSET: i32 = 250;
 pub const MAX_ABS_GIRO: u16 = 248;
 /// `MAX_ABS_ELEV`.
 pub const MAX_ABS_ELEV: u16 = 100;
-const MAX_PARAMS: usize = 20;
 const LINE_CAPACITY: usize = 255;
 
 /// The steps of the power-up homing (`enum STEP_INIT`).
@@ -390,36 +390,9 @@ impl PanTiltFirmware {
 
     // ------------------------------------------------------------------ main.c
 
+    /// `decode_command` (shared by both firmwares).
     fn decode_command(&mut self, line: &[u8]) -> (u8, i32) {
-        let command = line.first().copied().unwrap_or(0);
-        let mut num_params: usize = 0;
-        self.param[0] = 0;
-        let mut inicio_num = false;
-        for &c in line.iter().skip(1) {
-            match c {
-                b'\r' => continue,
-                b' ' | b'\n' => {
-                    num_params += 1;
-                    if num_params < MAX_PARAMS {
-                        self.param[num_params] = 0;
-                    }
-                }
-                _ => {
-                    inicio_num = true;
-                    if num_params < MAX_PARAMS {
-                        let p = &mut self.param[num_params];
-                        *p = p
-                            .wrapping_mul(10)
-                            .wrapping_add(u16::from(c).wrapping_sub(u16::from(b'0')));
-                    }
-                }
-            }
-        }
-        let mut n = num_params.min(MAX_PARAMS - 1) as i32;
-        if !inicio_num {
-            n -= 1;
-        }
-        (command, n)
+        super::decode_command(line, &mut self.param)
     }
 
     /// `init_secuence(step)`: one pass of the power-up homing; true when the step is done.

@@ -253,27 +253,37 @@ impl LaserModel {
     }
 }
 
+/// An LMS at 0.3 m, 361 beams over 180°, 38400 bps, for tests.
+#[cfg(test)]
+pub(crate) fn lms_description(sigma: f64) -> LaserDescription {
+    use crate::config::values::{Finite, NonNegative, Positive};
+    LaserDescription {
+        x_m: Finite(0.0),
+        y_m: Finite(0.0),
+        yaw_deg: Finite(0.0),
+        z_m: Positive(0.3),
+        beams: 361,
+        fov_deg: Positive(180.0),
+        range_max_m: Positive(32.0),
+        sigma_m: NonNegative(sigma),
+        baud: 38_400,
+        sweep_s: Positive(0.02667),
+        telegram_bytes: 732,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::config::WorldDescription;
-    use crate::config::values::{Finite, NonNegative, Positive};
 
     fn lms(sigma: f64) -> LaserModel {
-        let d = LaserDescription {
-            x_m: Finite(0.0),
-            y_m: Finite(0.0),
-            yaw_deg: Finite(0.0),
-            z_m: Positive(0.3),
-            beams: 361,
-            fov_deg: Positive(180.0),
-            range_max_m: Positive(32.0),
-            sigma_m: NonNegative(sigma),
-            baud: 38_400,
-            sweep_s: Positive(0.02667),
-            telegram_bytes: 732,
-        };
-        LaserModel::new(&d, Pose2::new(0.1, 0.0, 0.0), sigma, Outliers::NONE)
+        LaserModel::new(
+            &lms_description(sigma),
+            Pose2::new(0.1, 0.0, 0.0),
+            sigma,
+            Outliers::NONE,
+        )
     }
 
     fn corridor() -> WorldMap {

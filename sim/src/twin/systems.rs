@@ -226,8 +226,6 @@ pub fn sense_lasers(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::robot_file::LaserDescription;
-    use crate::config::values::{Finite, NonNegative, Positive};
     use crate::laser::LaserModel;
     use bevy_ecs::system::RunSystemOnce;
     use robot::Stamp;
@@ -237,19 +235,7 @@ mod tests {
     /// the pose interpolated at its exact time and the delivery time of its telegram.
     #[test]
     fn a_scan_due_mid_step_gets_the_interpolated_pose() {
-        let desc = LaserDescription {
-            x_m: Finite(0.0),
-            y_m: Finite(0.0),
-            yaw_deg: Finite(0.0),
-            z_m: Positive(0.3),
-            beams: 361,
-            fov_deg: Positive(180.0),
-            range_max_m: Positive(32.0),
-            sigma_m: NonNegative(0.0),
-            baud: 38_400,
-            sweep_s: Positive(0.02667),
-            telegram_bytes: 732,
-        };
+        let desc = crate::laser::lms_description(0.0);
         let model = LaserModel::new(
             &desc,
             Pose2::IDENTITY,
