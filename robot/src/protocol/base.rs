@@ -31,6 +31,17 @@ pub struct ReplyError {
     pub got: String,
 }
 
+impl ReplyError {
+    /// The error for `line` (its newline dropped) answering `command`.
+    pub fn new(command: char, expected: &'static str, line: &str) -> Self {
+        ReplyError {
+            command,
+            expected,
+            got: line.strip_suffix('\n').unwrap_or(line).to_string(),
+        }
+    }
+}
+
 /// A command line that does not spell a drive command.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum CommandTextError {
@@ -209,11 +220,7 @@ pub fn parse_ack(line: &str, command: char) -> Result<(), ReplyError> {
 /// assert!(s.left_on && s.right_on && !s.sonar_firing);
 /// ```
 pub fn parse_status(line: &str, stamp: Stamp) -> Result<DriveStatus, ReplyError> {
-    let bad = |expected| ReplyError {
-        command: 'l',
-        expected,
-        got: line.strip_suffix('\n').unwrap_or(line).to_string(),
-    };
+    let bad = |expected| ReplyError::new('l', expected, line);
     let fields =
         super::reply_fields(line, 'l').ok_or_else(|| bad("a line `l…` ending in a newline"))?;
     let [left, right, el, er, es] = fields[..] else {
@@ -251,11 +258,7 @@ pub fn parse_status(line: &str, stamp: Stamp) -> Result<DriveStatus, ReplyError>
 /// assert_eq!(b.motor_24_mv, 25837);
 /// ```
 pub fn parse_battery(line: &str, stamp: Stamp) -> Result<BatteryVoltages, ReplyError> {
-    let bad = || ReplyError {
-        command: 't',
-        expected: "`t` and four millivolt values",
-        got: line.strip_suffix('\n').unwrap_or(line).to_string(),
-    };
+    let bad = || ReplyError::new('t', "`t` and four millivolt values", line);
     let values: Vec<u16> = super::reply_fields(line, 't')
         .ok_or_else(bad)?
         .into_iter()

@@ -72,11 +72,7 @@ pub fn encode_wait(wait: &PanTiltWait) -> String {
 /// assert!(parse_status("l12 -36 31\n", Stamp::ZERO).is_err());
 /// ```
 pub fn parse_status(line: &str, stamp: Stamp) -> Result<PanTiltStatus, ReplyError> {
-    let bad = |expected| ReplyError {
-        command: 'l',
-        expected,
-        got: line.strip_suffix('\n').unwrap_or(line).to_string(),
-    };
+    let bad = |expected| ReplyError::new('l', expected, line);
     let fields =
         super::reply_fields(line, 'l').ok_or_else(|| bad("a line `l…` ending in a newline"))?;
     let [pan, pan_clicks, tilt, tilt_clicks, izq, der, inf, eg, ee] = fields[..] else {
