@@ -1,6 +1,7 @@
 //! The sonar ring through the hardware contract and the ported firmware: echo times convert to
 //! distances, a wall met at 45° sends the burst away, the firmware only listens for its echo
-//! window, and the ring fires its sequence one transducer at a time with the firmware's timing.
+//! window, and the ring fires its sequence one transducer at a time with the firmware's timing;
+//! the sonar-ring run writes one full reading and draws it.
 
 mod common;
 
@@ -131,4 +132,38 @@ fn a_robot_without_a_ring_says_so() {
     let mut robot = sim::SimRobot::new(twin, 9600);
     let err = robot.sonar_echoes().unwrap_err();
     assert_eq!(err.kind(), ErrorKind::Unsupported);
+}
+
+#[test]
+fn the_sonar_ring_run_writes_one_full_reading_and_its_picture() {
+    let scenario = scenario("sonar-ring");
+    let record =
+        sim::run::run_scenario(&scenario, &sim::run::RunOptions::default(), |_, _| {}).unwrap();
+    let ring = record.sonar.as_ref().expect("the scenario fires the ring");
+    assert_eq!(ring.echoes.times.len(), 16);
+    let heard = ring
+        .echoes
+        .times
+        .iter()
+        .filter(|&&t| t != SONAR_NO_ECHO)
+        .count();
+    // Turned 30° to the walls: most transducers hear something, some lose the burst.
+    assert!((8..16).contains(&heard), "{heard} of 16 heard an echo");
+    assert!(
+        ring.echoes.measured.iter().all(Option::is_some),
+        "every reading stamped"
+    );
+    let dir = std::env::temp_dir().join(format!("twin-sonar-ring-{}", std::process::id()));
+    sim::output::write_all(&record, &scenario, &dir).unwrap();
+    let svg = std::fs::read_to_string(dir.join("map.svg")).unwrap();
+    assert_eq!(
+        svg.matches("<title>sonar ").count(),
+        16,
+        "one wedge or ray each"
+    );
+    assert_eq!(svg.matches(": no echo</title>").count(), 16 - heard);
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("sonar.json")).unwrap()).unwrap();
+    assert_eq!(json["readings"].as_array().map(Vec::len), Some(16));
+    let _ = std::fs::remove_dir_all(&dir);
 }
