@@ -29,7 +29,8 @@ pub struct SonarModel {
     fan: Vec<f64>,
     min_range: f64,
     max_range: f64,
-    critical: f64,
+    /// Cosine of the critical angle of incidence.
+    cos_critical: f64,
     sigma: f64,
     height: f64,
 }
@@ -62,7 +63,7 @@ impl SonarModel {
             fan,
             min_range: desc.min_range_m.get(),
             max_range: desc.max_range_m.get(),
-            critical: desc.critical_deg.get().to_radians(),
+            cos_critical: desc.critical_deg.get().to_radians().cos(),
             sigma: desc.sigma_m.get(),
             height: desc.height_m.get(),
         }
@@ -119,7 +120,7 @@ impl SonarModel {
             travelled += hit.distance;
             let n = [hit.normal[0], hit.normal[1]];
             let cos_incidence = -(d[0] * n[0] + d[1] * n[1]);
-            if cos_incidence.clamp(-1.0, 1.0).acos() <= self.critical {
+            if cos_incidence >= self.cos_critical {
                 return (travelled >= self.min_range).then_some(travelled);
             }
             // Specular: the burst goes on, mirrored.

@@ -7,9 +7,9 @@
 //! cast in the plane along its horizontal direction, nearest boxes first (`Bvh::find_best`), with
 //! a slab test on the boxes and an exact ray–segment intersection in `f64` at the leaves — both
 //! written here, as parry's general-purpose versions took three quarters of a scan's time. Each
-//! candidate face's hit is kept only if the ray is between the face's bottom and top there. A horizontal ray never needs more: the level laser and the sonar cost
-//! what a 2D cast does. A tilted ray is also tested against the horizontal faces, the floor and
-//! the ceiling.
+//! candidate face's hit is kept only if the ray is between the face's bottom and top there. A
+//! horizontal ray never needs more: the level laser and the sonar cost what a 2D cast does. A
+//! tilted ray is also tested against the horizontal faces, the floor and the ceiling.
 
 use crate::config::{Material, WorldDescription};
 use crate::laser::beam::Optics;

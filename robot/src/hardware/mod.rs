@@ -173,10 +173,7 @@ pub trait PanTilt: Hardware {
         target: PanTiltPosition,
         poll: u16,
         limit: u32,
-    ) -> Result<PanTiltStatus, Self::Error>
-    where
-        Self: Sized,
-    {
+    ) -> Result<PanTiltStatus, Self::Error> {
         self.pan_tilt(PanTiltCommand::Pan(target.pan))?;
         self.pan_tilt(PanTiltCommand::Tilt(target.tilt))?;
         let mut status = self.pan_tilt_status()?;

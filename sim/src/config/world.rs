@@ -204,7 +204,7 @@ impl WorldDescription {
             let rect = rectangle(source, &b.center, &b.size, b.heading_deg, &field)?;
             walls.push(Wall {
                 material,
-                points: rect.corners(1.0, 1.0),
+                points: rect.corners(),
                 closed: true,
                 z: heights(&b.z, field("z"))?,
             });
@@ -225,7 +225,7 @@ impl WorldDescription {
             }
             walls.push(Wall {
                 material,
-                points: rect.corners(1.0, 1.0),
+                points: rect.corners(),
                 closed: true,
                 z: [height - TABLE_TOP, height],
             });
@@ -243,7 +243,7 @@ impl WorldDescription {
                         pose: leg_pose,
                         size: [leg, leg],
                     }
-                    .corners(1.0, 1.0),
+                    .corners(),
                     closed: true,
                     z: [0.0, height - TABLE_TOP],
                 });
@@ -296,12 +296,12 @@ struct Rectangle {
 }
 
 impl Rectangle {
-    /// The corners, counter-clockwise, of the rectangle scaled by `sx` and `sy`.
-    fn corners(&self, sx: f64, sy: f64) -> Vec<[f64; 2]> {
+    /// The corners, counter-clockwise.
+    fn corners(&self) -> Vec<[f64; 2]> {
         let [w, h] = self.size;
         [(0.5, 0.5), (-0.5, 0.5), (-0.5, -0.5), (0.5, -0.5)]
             .map(|(a, b)| {
-                let (x, y) = self.pose.transform_point(a * w * sx, b * h * sy);
+                let (x, y) = self.pose.transform_point(a * w, b * h);
                 [x, y]
             })
             .to_vec()

@@ -25,7 +25,7 @@
 //! - `w` honours its flags only when all three are given; with fewer arguments it just waits;
 //! - argument slots not written by the current command keep the values of earlier commands.
 
-use super::MAX_PARAMS;
+use super::{MAX_PARAMS, limit_range};
 use std::fmt::Write as _;
 
 /// Greatest number of sonars in a sequence (`MAX_SONARS`).
@@ -46,7 +46,7 @@ pub struct HBridge {
 
 impl HBridge {
     /// `m_*_stop`: direction pin high, brake on, PWM 255 (the motor is shorted).
-    const STOPPED: HBridge = HBridge {
+    pub(crate) const STOPPED: HBridge = HBridge {
         forward: true,
         brake: true,
         pwm: 255,
@@ -191,7 +191,7 @@ impl BaseFirmware {
     /// at 255 bytes (the C code would overrun).
     pub fn execute_line(&mut self, line: &[u8]) {
         let line = &line[..line.len().min(LINE_CAPACITY)];
-        let (command, num_params) = self.decode_command(line);
+        let (command, num_params) = super::decode_command(line, &mut self.param);
         self.do_command(command, num_params);
     }
 
@@ -322,13 +322,6 @@ impl BaseFirmware {
         let mut s = String::new();
         let _ = write!(s, "{x}");
         self.puts(&s);
-    }
-
-    // ------------------------------------------------------------------ main.c
-
-    /// `decode_command` (shared by both firmwares).
-    fn decode_command(&mut self, line: &[u8]) -> (u8, i32) {
-        super::decode_command(line, &mut self.param)
     }
 
     // ------------------------------------------------------------------ command.c
@@ -732,10 +725,6 @@ impl BaseFirmware {
 }
 
 /// `limit_range`: add the error to the duty and clamp to 0..=255.
-fn limit_range(pwm: u8, error: i32) -> u8 {
-    (i32::from(pwm) + error).clamp(0, 255) as u8
-}
-
 /// `print_help`, as in App. A.
 const HELP: [&str; 20] = [
     "Comandos disponibles:\n\n",
@@ -823,9 +812,9 @@ mod tests {
         fw.receive(b"k5\n");
         assert_eq!((fw.k_vel_ini, fw.k_vel_end, fw.k_ms_inc), (5, 0, 9));
         // '\r' is skipped; a letter folds in as c - '0'.
-        let (cmd, n) = fw.decode_command(b"a1\r0\n");
+        let (cmd, n) = crate::firmware::decode_command(b"a1\r0\n", &mut fw.param);
         assert_eq!((cmd, n, fw.param[0]), (b'a', 1, 10));
-        let (_, _) = fw.decode_command(b"a1x\n");
+        let (_, _) = crate::firmware::decode_command(b"a1x\n", &mut fw.param);
         assert_eq!(fw.param[0], 10 + (u16::from(b'x') - u16::from(b'0')));
     }
 

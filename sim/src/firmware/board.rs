@@ -1,9 +1,9 @@
 //! A microcontroller board: the firmware, its serial port, and when its main loop is free.
 //!
 //! Both of the robot's microcontrollers (the base's and the pan-tilt's) run the same shape of
-//! program: interrupts count encoder edges and set a flag every 1.024 ms; the main loop executes a
-//! received line, then, if a real-time interrupt has happened, runs `check_rtf` once. `ser0_putchar` busy-waits
-//! until the UART can take the next byte, so while a reply goes out at 9600 bps — 18 ms for a
+//! program: interrupts count encoder edges and set a flag every 1.024 ms; the main loop executes
+//! a received line, then, if a real-time interrupt has happened, runs `check_rtf` once.
+//! `ser0_putchar` busy-waits until the UART can take the next byte, so while a reply goes out at 9600 bps — 18 ms for a
 //! status line — the main loop is stuck: the speed loop does not run, the ramp timer does not
 //! count, and the 8-bit encoder pulse accumulators, no longer latched, saturate at 255.
 //! [`Board`] reproduces that timing for any firmware that implements [`MainLoop`]:

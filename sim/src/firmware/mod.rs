@@ -9,6 +9,11 @@ pub use base::{BaseFirmware, HBridge};
 pub use board::{BaseBoard, Board, MainLoop};
 pub use pan_tilt::PanTiltFirmware;
 
+/// `limit_range` of both firmwares' `control.c`: a PWM duty moved by `error`, kept in 0..=255.
+pub(crate) fn limit_range(pwm: u8, error: i32) -> u8 {
+    (i32::from(pwm) + error).clamp(0, 255) as u8
+}
+
 /// Argument slots of both firmwares (`static unsigned short param[20]`).
 pub(crate) const MAX_PARAMS: usize = 20;
 

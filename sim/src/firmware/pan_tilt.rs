@@ -20,9 +20,9 @@
 //! - the limit-switch interrupts fire on the switch being pressed (falling edge, `TCTL3`) and stop
 //!   the pan when it moves towards that switch; the tilt's lower switch is polled.
 
-use super::MAX_PARAMS;
 use super::base::HBridge;
 use super::board::MainLoop;
+use super::{MAX_PARAMS, limit_range};
 use std::fmt::Write as _;
 
 /// `OFFSET`: channel-B clicks required between two counted index pulses.
@@ -108,7 +108,7 @@ impl Axis {
             pos_control: false,
             des_vel_clicks: 0,
             max_vel_clicks: 0,
-            bridge: STOPPED,
+            bridge: HBridge::STOPPED,
             k_pro: 100,
             edo_motor: false,
             k_vel_ini: 3,
@@ -129,7 +129,7 @@ impl Axis {
 
     /// `m_giro_stop` / `m_elev_stop`.
     fn motor_stop(&mut self) {
-        self.bridge = STOPPED;
+        self.bridge = HBridge::STOPPED;
         self.edo_motor = false;
         self.acelerando = false;
         self.frenando = false;
@@ -189,7 +189,7 @@ impl Axis {
         let vel = i32::from(self.g_vel);
         self.total_clicks = self.total_clicks.wrapping_add(vel as u32);
         let error = self.k_pro * (i32::from(self.des_vel_clicks) - vel) / 100;
-        self.bridge.pwm = (i32::from(self.bridge.pwm) + error).clamp(0, 255) as u8;
+        self.bridge.pwm = limit_range(self.bridge.pwm, error);
     }
 
     /// `ac_control_giro` / `ac_control_elev`.
@@ -247,13 +247,6 @@ impl Axis {
         }
     }
 }
-
-/// `m_*_stop`: direction pin high, brake on, PWM 255.
-const STOPPED: HBridge = HBridge {
-    forward: true,
-    brake: true,
-    pwm: 255,
-};
 
 /// The state of the pan-tilt microcontroller.
 #[derive(Clone, Debug)]
@@ -366,7 +359,7 @@ impl PanTiltFirmware {
     /// Decodes and executes one received command line.
     pub fn execute_line(&mut self, line: &[u8]) {
         let line = &line[..line.len().min(LINE_CAPACITY)];
-        let (command, num_params) = self.decode_command(line);
+        let (command, num_params) = super::decode_command(line, &mut self.param);
         self.do_command(command, num_params);
     }
 
@@ -389,11 +382,6 @@ impl PanTiltFirmware {
     }
 
     // ------------------------------------------------------------------ main.c
-
-    /// `decode_command` (shared by both firmwares).
-    fn decode_command(&mut self, line: &[u8]) -> (u8, i32) {
-        super::decode_command(line, &mut self.param)
-    }
 
     /// `init_secuence(step)`: one pass of the power-up homing; true when the step is done.
     fn init_secuence(&mut self, s: Step) -> bool {

@@ -90,10 +90,17 @@ impl LaserFrame {
     /// The world direction of the beam at `angle` in the scan plane.
     pub fn direction(&self, angle: f64) -> [f64; 3] {
         let (sa, ca) = angle.sin_cos();
+        let (forward, left) = self.axes();
+        [0, 1, 2].map(|k| ca * forward[k] + sa * left[k])
+    }
+
+    /// The scan plane's unit axes in the world: the middle beam's direction and the first
+    /// beam's opposite (the laser's left). A beam at angle `a` points along
+    /// `cos a · forward + sin a · left`.
+    pub fn axes(&self) -> ([f64; 3], [f64; 3]) {
         let (st, ct) = self.tilt.sin_cos();
         let (sy, cy) = self.yaw.sin_cos();
-        let (x, y, z) = (ca * ct, sa, ca * st);
-        [cy * x - sy * y, sy * x + cy * y, z]
+        ([cy * ct, sy * ct, st], [-sy, cy, 0.0])
     }
 
     /// The world point `range` metres along the beam at `angle`.
@@ -201,15 +208,12 @@ impl LaserModel {
         rng: &mut SimRng,
     ) -> LaserScan {
         let optics = map.optics().prepared();
-        let (st, ct) = frame.tilt.sin_cos();
-        let (sy, cy) = frame.yaw.sin_cos();
+        let (forward, left) = frame.axes();
         let ranges_mm = self
             .beam_trig
             .iter()
             .map(|&(sa, ca)| {
-                // `LaserFrame::direction`, with the scan's sines and cosines taken once.
-                let (x, y, z) = (ca * ct, sa, ca * st);
-                let dir = [cy * x - sy * y, sy * x + cy * y, z];
+                let dir = [0, 1, 2].map(|k| ca * forward[k] + sa * left[k]);
                 let echo = beam::trace_prepared(
                     map,
                     &optics,

@@ -20,17 +20,62 @@ const LEGEND_COLUMN: f64 = 280.0;
 const GHOST_MARGIN: f64 = 0.15;
 /// Points lower than this (metres) hit the floor.
 const FLOOR_BAND: f64 = 0.03;
+
+/// What a scan point hit, as the pictures colour it.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub(super) enum PointKind {
+    /// A wall or object.
+    Surface,
+    /// The floor (a tilted laser).
+    Floor,
+    /// No surface there: a mirror image or an outlier.
+    Ghost,
+}
+
+impl PointKind {
+    /// What the world point `p` is: farther than 15 cm from every surface is a ghost, lower
+    /// than 3 cm is the floor.
+    pub(super) fn of(map: &WorldMap, p: [f64; 3]) -> Self {
+        if map.distance_3d(p) > GHOST_MARGIN {
+            PointKind::Ghost
+        } else if p[2] < FLOOR_BAND {
+            PointKind::Floor
+        } else {
+            PointKind::Surface
+        }
+    }
+
+    /// Its colour in the pictures.
+    pub(super) const fn colour(self) -> &'static str {
+        match self {
+            PointKind::Surface => "#1f3b73",
+            PointKind::Floor => "#2ca25f",
+            PointKind::Ghost => "#e0115f",
+        }
+    }
+}
+
+/// The colour a wall of `material` is drawn in.
+pub(super) fn wall_colour(material: Material) -> &'static str {
+    match material {
+        Material::Matte => "#c9c9c9",
+        Material::Black => "#8c8c8c",
+        Material::Glass => "#8ec9f0",
+        Material::Metal => "#b3a6c9",
+    }
+}
+
 /// The legend's entries.
 const LEGEND: [(&str, &str); 6] = [
     ("#1a9850", "true path"),
     ("#d73027", "odometry"),
-    ("#1f3b73", "scans placed at the true pose"),
+    (PointKind::Surface.colour(), "scans placed at the true pose"),
     ("#f08a24", "scans placed at odometry"),
-    ("#e0115f", "ghosts: no surface there"),
+    (PointKind::Ghost.colour(), "ghosts: no surface there"),
     ("#c9c9c9", "walls (blue glass, violet metal)"),
 ];
 /// The legend's entry for floor hits, shown when a tilted laser made some.
-const FLOOR_LEGEND: (&str, &str) = ("#2ca25f", "floor hits (tilted laser)");
+const FLOOR_LEGEND: (&str, &str) = (PointKind::Floor.colour(), "floor hits (tilted laser)");
 
 /// Writes the map picture.
 pub fn write_map_svg(
@@ -82,25 +127,16 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
 
     // Walls.
     for wall in &world.walls {
-        let (colour, w) = match wall.material {
-            Material::Matte => ("#c9c9c9", 5.0),
-            Material::Black => ("#8c8c8c", 6.0),
-            Material::Glass => ("#8ec9f0", 5.0),
-            Material::Metal => ("#b3a6c9", 5.0),
+        let colour = wall_colour(wall.material);
+        let w = if wall.material == Material::Black {
+            6.0
+        } else {
+            5.0
         };
-        let mut d = String::new();
-        for (i, p) in wall.points.iter().enumerate() {
-            let _ = write!(
-                d,
-                "{}{:.1} {:.1}",
-                if i == 0 { "M" } else { "L" },
-                f.x(p[0]),
-                f.y(p[1])
-            );
-        }
-        if wall.closed {
-            d.push('Z');
-        }
+        let d = path_data(
+            wall.points.iter().map(|p| (f.x(p[0]), f.y(p[1]))),
+            wall.closed,
+        );
         let _ = writeln!(
             s,
             r#"<path d="{d}" stroke="{colour}" stroke-width="{w}" fill="none" stroke-linejoin="round"><title>{}</title></path>"#,
@@ -120,9 +156,17 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
     };
     for (d, colour, label) in [
         (dots(&points.drifted), "#f08a24", "scans at odometry"),
-        (dots(&points.seen), "#1f3b73", "scans at true pose"),
+        (
+            dots(&points.seen),
+            PointKind::Surface.colour(),
+            "scans at true pose",
+        ),
         (dots(&points.floor), FLOOR_LEGEND.0, FLOOR_LEGEND.1),
-        (dots(&points.ghosts), "#e0115f", "ghosts: no surface there"),
+        (
+            dots(&points.ghosts),
+            PointKind::Ghost.colour(),
+            "ghosts: no surface there",
+        ),
     ] {
         let _ = writeln!(
             s,
@@ -156,16 +200,7 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
             "odometry",
         ),
     ] {
-        let mut d = String::new();
-        for (i, p) in poses.iter().enumerate() {
-            let _ = write!(
-                d,
-                "{}{:.1} {:.1}",
-                if i == 0 { "M" } else { "L" },
-                f.x(p.x),
-                f.y(p.y)
-            );
-        }
+        let d = path_data(poses.iter().map(|p| (f.x(p.x), f.y(p.y))), false);
         let _ = writeln!(
             s,
             r#"<path d="{d}" stroke="{colour}" stroke-width="2"{dash} fill="none"><title>{label}</title></path>"#
@@ -262,12 +297,10 @@ fn classify_points(record: &RunRecord, map: &WorldMap) -> ScanPoints {
             }
             let angle = r.scan.angle(i);
             let p = r.frame.point(angle, range);
-            let target = if map.distance_3d(p) > GHOST_MARGIN {
-                &mut out.ghosts
-            } else if p[2] < FLOOR_BAND {
-                &mut out.floor
-            } else {
-                &mut out.seen
+            let target = match PointKind::of(map, p) {
+                PointKind::Ghost => &mut out.ghosts,
+                PointKind::Floor => &mut out.floor,
+                PointKind::Surface => &mut out.seen,
             };
             target.push(p);
             out.drifted.push(at_odometry.point(angle, range));
@@ -276,7 +309,21 @@ fn classify_points(record: &RunRecord, map: &WorldMap) -> ScanPoints {
     out
 }
 
-fn xml_escape(text: &str) -> String {
+/// The SVG path data through `points` (already in pixels), closed back to the first if
+/// `closed`.
+pub(super) fn path_data(points: impl IntoIterator<Item = (f64, f64)>, closed: bool) -> String {
+    let mut d = String::new();
+    for (i, (x, y)) in points.into_iter().enumerate() {
+        let _ = write!(d, "{}{x:.1} {y:.1}", if i == 0 { "M" } else { "L" });
+    }
+    if closed {
+        d.push('Z');
+    }
+    d
+}
+
+/// Text safe inside SVG markup.
+pub(super) fn xml_escape(text: &str) -> String {
     text.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")

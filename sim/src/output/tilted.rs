@@ -6,7 +6,8 @@
 //! floor at `h / (cos a · sin t)` — dashed: floor hits lie on the curve, walls and objects in
 //! front of the floor below it. The right panel places the points in the world, with the walls.
 
-use crate::config::{Material, WorldDescription};
+use super::svg::{PointKind, path_data, wall_colour, xml_escape};
+use crate::config::WorldDescription;
 use crate::run::{RunRecord, ScanRecord};
 use crate::world_map::WorldMap;
 use std::fmt::Write as _;
@@ -14,16 +15,8 @@ use std::path::Path;
 
 /// A scan counts as tilted beyond this, radians (half a degree).
 const TILTED: f64 = 0.5 * std::f64::consts::PI / 180.0;
-/// Points lower than this (metres) are on the floor.
-const FLOOR_BAND: f64 = 0.03;
-/// Points farther than this from every surface are ghosts, metres.
-const GHOST_MARGIN: f64 = 0.15;
 /// Size of each panel, pixels.
 const PANEL: f64 = 460.0;
-/// Colours of floor hits, other surfaces, ghosts.
-const FLOOR: &str = "#2ca25f";
-const SURFACE: &str = "#1f3b73";
-const GHOST: &str = "#e0115f";
 
 /// The last scan of the run taken with the scan plane tilted, if any.
 pub fn last_tilted(record: &RunRecord) -> Option<&ScanRecord> {
@@ -45,6 +38,8 @@ pub fn write_tilted_svg(
 }
 
 struct Point {
+    angle: f64,
+    range: f64,
     xy: [f64; 2],
     colour: &'static str,
 }
@@ -53,30 +48,21 @@ fn render(r: &ScanRecord, world: &WorldDescription, scenario: &str) -> String {
     let map = WorldMap::new(world);
     let frame = r.frame;
     let (sy, cy) = frame.yaw.sin_cos();
-    let colour_of: Vec<Option<&'static str>> = (0..r.scan.len())
-        .map(|i| {
-            let range = r.scan.range_m(i)?;
-            let p = frame.point(r.scan.angle(i), range);
-            Some(if map.distance_3d(p) > GHOST_MARGIN {
-                GHOST
-            } else if p[2] < FLOOR_BAND {
-                FLOOR
-            } else {
-                SURFACE
-            })
-        })
-        .collect();
     let points: Vec<Point> = (0..r.scan.len())
         .filter_map(|i| {
+            let angle = r.scan.angle(i);
             let range = r.scan.range_m(i)?;
-            let p = frame.point(r.scan.angle(i), range);
+            let p = frame.point(angle, range);
             Some(Point {
+                angle,
+                range,
                 xy: [p[0], p[1]],
-                colour: colour_of[i]?,
+                colour: PointKind::of(&map, p).colour(),
             })
         })
         .collect();
-    let floor_hits = points.iter().filter(|p| p.colour == FLOOR).count();
+    let floor_colour = PointKind::Floor.colour();
+    let floor_hits = points.iter().filter(|p| p.colour == floor_colour).count();
 
     let (min, max) = world.bounds();
     let k = PANEL / ((max[0] - min[0]).max(max[1] - min[1]) + 1.0);
@@ -94,15 +80,9 @@ fn render(r: &ScanRecord, world: &WorldDescription, scenario: &str) -> String {
 
     // Range against beam angle, with the floor's range by trigonometry: a beam at angle a in a
     // plane tilted down by t from height h meets the floor at h / (cos a · sin t).
-    let ranges: Vec<(f64, f64, &str)> = (0..r.scan.len())
-        .filter_map(|i| {
-            let range = r.scan.range_m(i)?;
-            Some((r.scan.angle(i), range, colour_of[i]?))
-        })
-        .collect();
-    let r_max = ranges
+    let r_max = points
         .iter()
-        .map(|p| p.1)
+        .map(|p| p.range)
         .fold(1.0f64, f64::max)
         .min(16.0)
         .ceil();
@@ -165,12 +145,13 @@ fn render(r: &ScanRecord, world: &WorldDescription, scenario: &str) -> String {
             r##"<path d="{curve}" stroke="#2ca25f" stroke-width="1.5" stroke-dasharray="5 4" fill="none"/>"##
         );
     }
-    for (a, range, colour) in &ranges {
+    for p in &points {
         let _ = write!(
             s,
-            r#"<circle cx="{:.1}" cy="{:.1}" r="2" fill="{colour}"/>"#,
-            ax(*a),
-            ry(*range)
+            r#"<circle cx="{:.1}" cy="{:.1}" r="2" fill="{}"/>"#,
+            ax(p.angle),
+            ry(p.range),
+            p.colour
         );
     }
     let _ = writeln!(s);
@@ -185,28 +166,14 @@ fn render(r: &ScanRecord, world: &WorldDescription, scenario: &str) -> String {
         r#"<clipPath id="top"><rect x="{ox:.0}" y="{oy:.0}" width="{PANEL:.0}" height="{top_height:.0}"/></clipPath><g clip-path="url(#top)">"#
     );
     for wall in &world.walls {
-        let colour = match wall.material {
-            Material::Matte => "#c9c9c9",
-            Material::Black => "#8c8c8c",
-            Material::Glass => "#8ec9f0",
-            Material::Metal => "#b3a6c9",
-        };
-        let mut d = String::new();
-        for (i, p) in wall.points.iter().enumerate() {
-            let _ = write!(
-                d,
-                "{}{:.1} {:.1}",
-                if i == 0 { "M" } else { "L" },
-                tx(p[0]),
-                ty(p[1])
-            );
-        }
-        if wall.closed {
-            d.push('Z');
-        }
+        let d = path_data(
+            wall.points.iter().map(|p| (tx(p[0]), ty(p[1]))),
+            wall.closed,
+        );
         let _ = writeln!(
             s,
-            r#"<path d="{d}" stroke="{colour}" stroke-width="4" fill="none"/>"#
+            r#"<path d="{d}" stroke="{}" stroke-width="4" fill="none"/>"#,
+            wall_colour(wall.material)
         );
     }
     for p in &points {
@@ -260,9 +227,9 @@ fn render(r: &ScanRecord, world: &WorldDescription, scenario: &str) -> String {
         points.len()
     );
     for (i, (colour, label)) in [
-        (FLOOR, "floor hits"),
-        (SURFACE, "walls and objects"),
-        (GHOST, "ghosts: no surface there"),
+        (PointKind::Floor.colour(), "floor hits"),
+        (PointKind::Surface.colour(), "walls and objects"),
+        (PointKind::Ghost.colour(), "ghosts: no surface there"),
     ]
     .iter()
     .enumerate()
@@ -279,10 +246,4 @@ fn render(r: &ScanRecord, world: &WorldDescription, scenario: &str) -> String {
     }
     s.push_str("</svg>\n");
     s
-}
-
-fn xml_escape(text: &str) -> String {
-    text.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
 }
