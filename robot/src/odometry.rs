@@ -121,6 +121,18 @@ pub fn integrate_arc(pose: Pose2, left: f64, right: f64, track: f64) -> Pose2 {
     }
 }
 
+/// A value that can be interpolated linearly between two samples.
+pub trait Interpolate: Copy {
+    /// The value a fraction `s` (0..=1) of the way from `self` to `other`.
+    fn interpolate(&self, other: &Self, s: f64) -> Self;
+}
+
+impl Interpolate for Pose2 {
+    fn interpolate(&self, other: &Pose2, s: f64) -> Pose2 {
+        Pose2::interpolate(self, other, s)
+    }
+}
+
 /// A time-ordered FIFO of poses, interpolated on demand: odometry waiting for the scans it must
 /// be paired with, or any path to be looked up by time.
 ///
@@ -134,43 +146,47 @@ pub fn integrate_arc(pose: Pose2, left: f64, right: f64, track: f64) -> Pose2 {
 /// assert!((p.x - 0.25).abs() < 1e-12 && (p.theta - 0.05).abs() < 1e-12);
 /// assert!(h.at(Stamp::from_millis(101)).is_none());
 /// ```
+pub type PoseHistory = History<Pose2>;
+
+/// A time-ordered FIFO of samples of anything [`Interpolate`], looked up at any instant between
+/// the first and the last.
 #[derive(Clone, Debug)]
-pub struct PoseHistory {
-    entries: VecDeque<(Stamp, Pose2)>,
+pub struct History<T> {
+    entries: VecDeque<(Stamp, T)>,
     capacity: usize,
 }
 
-impl PoseHistory {
-    /// An empty history that keeps at most `capacity` poses (the oldest are dropped).
+impl<T: Interpolate> History<T> {
+    /// An empty history that keeps at most `capacity` samples (the oldest are dropped).
     pub fn new(capacity: usize) -> Self {
-        PoseHistory {
+        History {
             entries: VecDeque::new(),
             capacity: capacity.max(2),
         }
     }
 
-    /// An empty history that keeps every pose.
+    /// An empty history that keeps every sample.
     pub fn unbounded() -> Self {
         Self::new(usize::MAX)
     }
 
-    /// Number of poses kept.
+    /// Number of samples kept.
     pub fn len(&self) -> usize {
         self.entries.len()
     }
 
-    /// Whether no pose is kept.
+    /// Whether no sample is kept.
     pub fn is_empty(&self) -> bool {
         self.entries.is_empty()
     }
 
-    /// The poses, oldest first.
-    pub fn iter(&self) -> impl ExactSizeIterator<Item = (Stamp, Pose2)> + '_ {
+    /// The samples, oldest first.
+    pub fn iter(&self) -> impl ExactSizeIterator<Item = (Stamp, T)> + '_ {
         self.entries.iter().copied()
     }
 
-    /// Appends a pose. A stamp equal to the newest replaces it; an older stamp is ignored.
-    pub fn push(&mut self, stamp: Stamp, pose: Pose2) {
+    /// Appends a sample. A stamp equal to the newest replaces it; an older stamp is ignored.
+    pub fn push(&mut self, stamp: Stamp, value: T) {
         match self.entries.back() {
             Some(&(last, _)) if stamp < last => return,
             Some(&(last, _)) if stamp == last => {
@@ -181,30 +197,30 @@ impl PoseHistory {
         if self.entries.len() == self.capacity {
             self.entries.pop_front();
         }
-        self.entries.push_back((stamp, pose));
+        self.entries.push_back((stamp, value));
     }
 
     /// The newest entry.
-    pub fn latest(&self) -> Option<(Stamp, Pose2)> {
+    pub fn latest(&self) -> Option<(Stamp, T)> {
         self.entries.back().copied()
     }
 
-    /// The pose at `stamp`, interpolated between the two entries around it; `None` when `stamp`
-    /// lies outside the history.
-    pub fn at(&self, stamp: Stamp) -> Option<Pose2> {
+    /// The value at `stamp`, interpolated between the two entries around it; `None` when
+    /// `stamp` lies outside the history.
+    pub fn at(&self, stamp: Stamp) -> Option<T> {
         let (first, _) = *self.entries.front()?;
-        let (last, last_pose) = *self.entries.back()?;
+        let (last, last_value) = *self.entries.back()?;
         if stamp < first || stamp > last {
             return None;
         }
         if stamp == last {
-            return Some(last_pose);
+            return Some(last_value);
         }
         let i = self.entries.partition_point(|&(t, _)| t <= stamp);
-        let (t0, p0) = self.entries[i - 1];
-        let (t1, p1) = self.entries[i];
+        let (t0, v0) = self.entries[i - 1];
+        let (t1, v1) = self.entries[i];
         let s = (stamp.0 - t0.0) as f64 / (t1.0 - t0.0) as f64;
-        Some(p0.interpolate(&p1, s))
+        Some(v0.interpolate(&v1, s))
     }
 }
 

@@ -124,9 +124,8 @@ pub struct HeadAngles {
     pub tilt: f64,
 }
 
-impl HeadAngles {
-    /// The angles a fraction `s` of the way to `other`.
-    pub fn interpolate(&self, other: &HeadAngles, s: f64) -> HeadAngles {
+impl robot::odometry::Interpolate for HeadAngles {
+    fn interpolate(&self, other: &HeadAngles, s: f64) -> HeadAngles {
         HeadAngles {
             pan: self.pan + (other.pan - self.pan) * s,
             tilt: self.tilt + (other.tilt - self.tilt) * s,

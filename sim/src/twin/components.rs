@@ -12,7 +12,7 @@ use crate::world_map::WorldMap;
 use bevy_ecs::prelude::*;
 use core::time::Duration;
 use rapier2d::prelude::{ColliderHandle, PhysicsWorld, RigidBodyHandle};
-use robot::odometry::PoseHistory;
+use robot::odometry::{History, PoseHistory};
 use robot::{Pose2, Stamp};
 use std::collections::VecDeque;
 
@@ -178,33 +178,21 @@ pub struct PanTiltUnit {
     pub board: crate::firmware::Board<PanTiltFirmware>,
     /// Motors, encoders, switches and the laser's geometry.
     pub head: PanTiltHead,
-    /// The head's angles at the end of every step (and at time zero), oldest first.
-    pub history: Vec<(Stamp, HeadAngles)>,
-}
-
-impl PanTiltUnit {
-    /// The head's angles at `t`, interpolated between steps (clamped to the simulated time).
-    pub fn angles_at(&self, t: Stamp) -> HeadAngles {
-        let i = self.history.partition_point(|(s, _)| *s < t);
-        match (
-            i.checked_sub(1).map(|j| self.history[j]),
-            self.history.get(i),
-        ) {
-            (_, Some(&(s1, a1))) if s1 == t => a1,
-            (Some((s0, a0)), Some(&(s1, a1))) => {
-                a0.interpolate(&a1, (t.0 - s0.0) as f64 / (s1.0 - s0.0) as f64)
-            }
-            (Some((_, a)), None) | (None, Some(&(_, a))) => a,
-            (None, None) => self.head.angles(),
-        }
-    }
+    /// The head's angles at the end of every step (and at time zero); the head turns at constant
+    /// speed within a step, so interpolating gives the angles at any time.
+    pub history: History<HeadAngles>,
 }
 
 /// Where a robot's laser looks with the base at `base` at time `t`: on its fixed mount, or on
-/// the pan-tilt head.
-pub fn laser_frame(lidar: &Lidar, unit: Option<&PanTiltUnit>, base: Pose2, t: Stamp) -> LaserFrame {
+/// the pan-tilt head; `None` outside the head's recorded time.
+pub fn laser_frame(
+    lidar: &Lidar,
+    unit: Option<&PanTiltUnit>,
+    base: Pose2,
+    t: Stamp,
+) -> Option<LaserFrame> {
     match unit {
-        Some(unit) => unit.head.laser_frame(base, unit.angles_at(t)),
-        None => lidar.model.frame_on(base),
+        Some(unit) => Some(unit.head.laser_frame(base, unit.history.at(t)?)),
+        None => Some(lidar.model.frame_on(base)),
     }
 }

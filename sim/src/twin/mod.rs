@@ -4,7 +4,8 @@
 //! entity whose components are its parts: the base microcontroller board, the drive train, the
 //! traction on the floor, the batteries, the chassis body, its true trajectory and its laser —
 //! and, when the robot has them, its sonar ring and its pan-tilt unit (a second microcontroller
-//! board and the head it drives, which carries the laser). The schedule runs with the single-threaded executor and refuses ambiguous system order, so two
+//! board and the head it drives, which carries the laser). The schedule runs with the
+//! single-threaded executor and refuses ambiguous system order, so two
 //! runs with the same seed are bit-identical.
 //!
 //! One step is [`STEP`] = 8 firmware ticks (8.192 ms): inside it the firmware and motors run
@@ -30,6 +31,7 @@ use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, SingleThreadedExecutor
 use components::*;
 use rapier2d::prelude::*;
 use robot::hardware::LaserScan;
+use robot::odometry::History;
 use robot::{Pose2, Stamp};
 use std::collections::VecDeque;
 
@@ -182,7 +184,11 @@ impl Twin {
             let head = PanTiltHead::new(pt);
             world.entity_mut(robot).insert(PanTiltUnit {
                 board: McuBoard::new(head.power_on_firmware(), pt.serial_baud),
-                history: vec![(Stamp::ZERO, head.angles())],
+                history: {
+                    let mut history = History::unbounded();
+                    history.push(Stamp::ZERO, head.angles());
+                    history
+                },
                 head,
             });
         }
@@ -313,12 +319,12 @@ impl Twin {
     /// outside the simulated time.
     pub fn laser_frame_at(&self, t: Stamp) -> Option<LaserFrame> {
         let base = self.true_pose_at(t)?;
-        Some(laser_frame(
+        laser_frame(
             self.component::<Lidar>(),
             self.world.get::<PanTiltUnit>(self.robot),
             base,
             t,
-        ))
+        )
     }
 
     /// The pan-tilt microcontroller board, if the robot has a pan-tilt.
@@ -338,11 +344,11 @@ impl Twin {
         self.world.get::<PanTiltUnit>(self.robot).map(|u| &u.head)
     }
 
-    /// The pan-tilt head's true angles at `t`, if the robot has one.
+    /// The pan-tilt head's true angles at `t`, if the robot has one and `t` is simulated.
     pub fn head_angles_at(&self, t: Stamp) -> Option<HeadAngles> {
         self.world
             .get::<PanTiltUnit>(self.robot)
-            .map(|u| u.angles_at(t))
+            .and_then(|u| u.history.at(t))
     }
 
     /// The true pose of the base now.

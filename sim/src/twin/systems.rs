@@ -184,7 +184,7 @@ pub fn run_pan_tilt(clock: Res<SimClock>, mut robots: Query<(&mut PanTiltUnit, &
                 .tick(tick_time, |fw| current = head.tick(fw, supply, dt), |_| {});
             power.0.draw(current, dt);
         }
-        unit.history.push((clock.now, unit.head.angles()));
+        unit.history.push(clock.now, unit.head.angles());
     }
 }
 
@@ -207,7 +207,8 @@ pub fn sense_lasers(
                 1.0
             };
             let base = p0.interpolate(&p1, s);
-            let frame = laser_frame(lidar, unit, base, t);
+            let frame = laser_frame(lidar, unit, base, t)
+                .expect("run_pan_tilt has recorded the head up to the end of the step");
             let delivery = timing.delivery(t, lidar.line_free);
             lidar.line_free = delivery;
             lidar.outbox.push_back(PendingScan {
