@@ -85,16 +85,12 @@ impl Joint {
         let b = |t: f64| (t * f64::from(B_EDGES_PER_TURN)).floor();
         let mut from = before;
         // Index pulses at the integers between the two positions, in path order.
-        let (lo, hi) = if up { (before, after) } else { (after, before) };
-        let first = lo.floor() as i64 + 1;
-        let last = hi.floor() as i64;
-        let crossings: Vec<i64> = if up {
-            (first..=last).collect()
-        } else {
-            (first..=last).rev().collect()
-        };
-        for index in crossings {
-            let at = index as f64;
+        let (lo, hi) = (
+            before.min(after).floor() as i64,
+            before.max(after).floor() as i64,
+        );
+        for k in 0..hi - lo {
+            let at = (if up { lo + 1 + k } else { hi - k }) as f64;
             fw.channel_b(tilt, (b(at) - b(from)).abs() as u32, up);
             fw.index_pulse(tilt);
             from = at;
