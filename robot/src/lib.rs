@@ -10,6 +10,10 @@
 //! - [`odometry`]: dead reckoning from the firmware's wheel counters, and a FIFO that interpolates
 //!   odometry to a scan's timestamp.
 //! - [`control`]: what the robot does — scripted tours of firmware motions.
+//! - [`localization`]: scan matchers (least squares, Lorentzian NLM, line-assisted, MbICP) and
+//!   the map builder that chains them.
+//! - [`logs`]: readers of recorded runs (CARMEN `.clf`, the `.script` and RobotLogger `.log`
+//!   formats of 002 App. C).
 //!
 //! Time is [`Stamp`] (integer nanoseconds) and is always passed in by the caller. Inside, units are
 //! SI and frames follow ROS REP-103 (x forward, y left, z up, angles counter-clockwise); the
@@ -21,6 +25,8 @@ pub mod control;
 pub mod drive_geometry;
 pub mod geometry;
 pub mod hardware;
+pub mod localization;
+pub mod logs;
 pub mod odometry;
 pub mod protocol;
 pub mod time;

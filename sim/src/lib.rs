@@ -11,7 +11,9 @@
 //!   models;
 //! - [`sim_robot`]: [`SimRobot`], the twin behind the robot crate's hardware contract, plus the
 //!   sim-only [`GroundTruth`];
-//! - [`run`] and [`output`]: the `twin run` job and the files it writes.
+//! - [`run`] and [`output`]: the `twin run` job and the files it writes;
+//! - [`pairs`]: scan pairs with known truth, for testing and measuring the matchers;
+//! - [`replay`]: localisation over recorded logs (`twin map`) and scan pairs (`twin match`).
 #![warn(missing_docs)]
 // `ConfigError` carries the file, line, field and excerpt; it is only returned while loading files.
 #![allow(clippy::result_large_err)]
@@ -21,6 +23,7 @@ pub mod config;
 pub mod firmware;
 pub mod laser;
 pub mod motor;
+pub mod pairs;
 pub mod pan_tilt;
 pub mod rng;
 pub mod sim_robot;
@@ -29,5 +32,6 @@ pub mod world_map;
 pub use sim_robot::{GroundTruth, SimError, SimRobot};
 pub use twin::Twin;
 pub mod output;
+pub mod replay;
 pub mod run;
 pub mod sonar;

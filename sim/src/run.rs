@@ -10,6 +10,7 @@ use robot::hardware::{
     DriveBase, DriveWait, LaserScan, PanTilt, PanTiltPosition, PanTiltStatus, SonarCommand,
     SonarRing,
 };
+use robot::localization::{MapBuilder, MapConfig, MatcherKind, Placed, RangeScan};
 use robot::{Pose2, Stamp};
 use std::time::Instant;
 
@@ -70,6 +71,34 @@ pub struct RunRecord {
     pub sonar: Option<SonarRecord>,
     /// The pan-tilt's status once it reached the scenario's position, before the script.
     pub pan_tilt: Option<PanTiltStatus>,
+    /// The scan-matching estimate, when the scenario localises.
+    pub localisation: Option<LocalisationRecord>,
+}
+
+/// What the localisation made of a run's scans.
+#[derive(Clone, Debug)]
+pub struct LocalisationRecord {
+    /// The matcher used.
+    pub matcher: MatcherKind,
+    /// One placed scan per kept scan, in the same order (world frame: it starts at the start
+    /// pose).
+    pub placed: Vec<Placed>,
+    /// The point map, world frame.
+    pub map: Vec<[f64; 2]>,
+    /// Wall-clock seconds spent localising.
+    pub wall_seconds: f64,
+}
+
+impl LocalisationRecord {
+    /// Position and heading errors of the estimate against the truth at each scan.
+    pub fn errors<'a>(&'a self, scans: &'a [ScanRecord]) -> impl Iterator<Item = (f64, f64)> + 'a {
+        self.placed.iter().zip(scans).map(|(p, s)| {
+            (
+                p.estimate.distance(&s.truth),
+                robot::geometry::wrap_angle(p.estimate.theta - s.truth.theta).abs(),
+            )
+        })
+    }
 }
 
 impl RunRecord {
@@ -153,10 +182,32 @@ pub fn run_scenario(
         start_sonar(&mut robot, sonar).map_err(|e| tour_error(hardware_error("(sonar)", e)))?;
     }
     let mut kept = Vec::new();
+    let mut mapper = scenario.localisation.map(|settings| {
+        let config = MapConfig {
+            mount: scenario.robot.laser_mount(),
+            keyframe_distance_m: settings.keyframe_distance_m,
+            keyframe_angle_rad: settings.keyframe_angle_rad,
+            ..MapConfig::default()
+        };
+        let matcher = settings.matcher.build();
+        (
+            settings.matcher,
+            MapBuilder::in_odometry_frame(matcher, config),
+        )
+    });
+    let mut localising = 0.0;
     let report = {
         let mut observer = |event: TourEvent<'_>| match event {
             TourEvent::StepStarted { index, total, .. } => progress(index, total),
-            TourEvent::Scan { scan, odometry } => kept.push((scan.clone(), odometry)),
+            TourEvent::Scan { scan, odometry } => {
+                if let Some((_, mapper)) = &mut mapper {
+                    let clock = Instant::now();
+                    mapper.push_odometry(scan.stamp, odometry);
+                    mapper.push_scan(RangeScan::from(scan));
+                    localising += clock.elapsed().as_secs_f64();
+                }
+                kept.push((scan.clone(), odometry));
+            }
         };
         run_tour(
             &mut robot,
@@ -194,6 +245,15 @@ pub fn run_scenario(
             }
         })
         .collect();
+    let localisation = mapper.map(|(matcher, mut mapper)| {
+        mapper.finish();
+        LocalisationRecord {
+            matcher,
+            placed: mapper.placed().to_vec(),
+            map: mapper.map_points().to_vec(),
+            wall_seconds: localising,
+        }
+    });
     let twin = robot.twin();
     Ok(RunRecord {
         scenario: scenario.name.clone(),
@@ -210,6 +270,7 @@ pub fn run_scenario(
         battery_charge: twin.battery_charge(),
         sonar,
         pan_tilt,
+        localisation,
     })
 }
 

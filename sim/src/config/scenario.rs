@@ -33,6 +33,11 @@
 //! pacing = "stop-and-go"                # or "polling" (see robot::control::tour)
 //! settle_s = 0.1                        # stop-and-go: wait after the motors stop
 //! poll_s = 0.05                         # polling: longest wait for a scan between polls
+//!
+//! [localisation]                        # optional: chain the scans into a map while running
+//! matcher = "lorentz"                   # ls, lorentz, lorentz-lines or mbicp
+//! keyframe_distance_m = 0.0             # match each scan to the last one moved this far from
+//! keyframe_angle_deg = 0.0              # (0: to the previous scan, as the thesis does)
 //! ```
 
 use super::error::{ConfigError, Source, resolve};
@@ -42,6 +47,7 @@ use super::world::WorldDescription;
 use crate::laser::outliers::Outliers;
 use core::time::Duration;
 use robot::control::{Pacing, Step, TourConfig};
+use robot::localization::UnknownMatcher;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 use toml::Spanned;
@@ -98,6 +104,17 @@ pub struct SonarSettings {
     pub relax_ms: u16,
 }
 
+/// Localisation during a run: which matcher chains the scans into a map (`[localisation]`).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct LocalisationSettings {
+    /// The matcher.
+    pub matcher: robot::localization::MatcherKind,
+    /// A scan becomes the next reference after this much travel, metres (0: every scan).
+    pub keyframe_distance_m: f64,
+    /// … or this much turn, radians (0: every scan).
+    pub keyframe_angle_rad: f64,
+}
+
 /// A validated scenario with its world and robot loaded.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scenario {
@@ -121,6 +138,8 @@ pub struct Scenario {
     pub sonar: Option<SonarSettings>,
     /// Where the pan-tilt head goes before the script, on a robot with a pan-tilt.
     pub pan_tilt: Option<robot::hardware::PanTiltPosition>,
+    /// The scan matcher the run localises with, if any.
+    pub localisation: Option<LocalisationSettings>,
     /// The file it was read from.
     pub path: PathBuf,
 }
@@ -242,6 +261,20 @@ impl Scenario {
                 Some(position)
             }
         };
+        let localisation = match &file.localisation {
+            None => None,
+            Some(l) => Some(LocalisationSettings {
+                matcher: l.matcher.get_ref().parse().map_err(|e: UnknownMatcher| {
+                    source.error(
+                        l.matcher.span(),
+                        Some("localisation.matcher".into()),
+                        e.to_string(),
+                    )
+                })?,
+                keyframe_distance_m: l.keyframe_distance_m.map_or(0.0, NonNegative::get),
+                keyframe_angle_rad: l.keyframe_angle_deg.map_or(0.0, |a| a.get().to_radians()),
+            }),
+        };
         Ok(Scenario {
             name: file.name,
             description: file.description,
@@ -253,6 +286,7 @@ impl Scenario {
             tour,
             sonar,
             pan_tilt,
+            localisation,
             path: source.path.clone(),
         })
     }
@@ -293,6 +327,15 @@ struct ScenarioFile {
     tour: Option<TourFile>,
     sonar: Option<SonarFile>,
     pan_tilt: Option<PanTiltFile>,
+    localisation: Option<LocalisationFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LocalisationFile {
+    matcher: Spanned<String>,
+    keyframe_distance_m: Option<NonNegative>,
+    keyframe_angle_deg: Option<NonNegative>,
 }
 
 #[derive(Deserialize)]

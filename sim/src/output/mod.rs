@@ -1,10 +1,12 @@
-//! The files `twin run` writes: trajectories in TUM format, scans as JSON Lines, a summary, a
-//! picture of the map, and — when the laser was tilted — a picture of a tilted scan.
+//! The files `twin run` writes: trajectories in TUM format (truth, odometry and — when the
+//! scenario localises — the scan-matching estimate), scans as JSON Lines, a summary, a picture of
+//! the map, and — when the laser was tilted — a picture of a tilted scan.
 //!
 //! Everything but `summary.json` (which reports wall-clock time) is a pure function of the
 //! scenario and the seed: numbers are printed with fixed precision, so two runs give the same
 //! bytes.
 
+pub mod logmap;
 mod scans;
 mod sonar;
 mod summary;
@@ -14,7 +16,7 @@ mod tum;
 
 pub use scans::{ScanLine, write_scans};
 pub use sonar::write_sonar;
-pub use summary::Summary;
+pub use summary::{LocalisationSummary, Summary, estimate_errors};
 pub use svg::write_map_svg;
 pub use tilted::{last_tilted, write_tilted_svg};
 pub use tum::write_tum;
@@ -49,6 +51,12 @@ pub fn write_all(record: &RunRecord, scenario: &Scenario, dir: &Path) -> std::io
         &file("odometry.tum"),
         record.scans.iter().map(|r| (r.scan.stamp, r.odometry)),
     )?;
+    if let Some(loc) = &record.localisation {
+        write_tum(
+            &file("estimate.tum"),
+            loc.placed.iter().map(|p| (p.stamp, p.estimate)),
+        )?;
+    }
     write_scans(&file("scans.jsonl"), &record.scans)?;
     Summary::of(record, (&scenario.world.name, &scenario.robot.name))
         .write(&file("summary.json"))?;

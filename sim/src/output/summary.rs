@@ -1,6 +1,6 @@
 //! `summary.json`: the figures of a run.
 
-use crate::run::RunRecord;
+use crate::run::{LocalisationRecord, RunRecord};
 use serde::Serialize;
 use std::path::Path;
 
@@ -36,6 +36,82 @@ pub struct Summary {
     pub collisions: u32,
     /// State of charge of the motor batteries at the end.
     pub motor_battery_charge: f64,
+    /// How well the scan-matching estimate followed the truth, when the run localised.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub localisation: Option<LocalisationSummary>,
+}
+
+/// The scan-matching estimate against the truth, at every scan.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LocalisationSummary {
+    /// The matcher.
+    pub matcher: String,
+    /// Position error of the estimate at the last scan, metres.
+    pub final_error_m: f64,
+    /// Heading error of the estimate at the last scan, degrees.
+    pub final_error_deg: f64,
+    /// RMS position error over all scans, metres.
+    pub rms_error_m: f64,
+    /// RMS heading error over all scans, degrees.
+    pub rms_error_deg: f64,
+    /// The odometry's RMS position error over the same scans, metres, for comparison.
+    pub odometry_rms_error_m: f64,
+    /// Matches made, and how many were trusted (enough correspondences).
+    pub matches: usize,
+    /// Matches trusted.
+    pub trusted: usize,
+    /// Matches that converged before their iteration cap.
+    pub converged: usize,
+    /// Mean correspondence searches per match.
+    pub mean_iterations: f64,
+    /// Wall-clock milliseconds spent localising per scan (machine-dependent).
+    pub wall_ms_per_scan: f64,
+}
+
+/// `(final m, final °, RMS m, RMS °)` of the estimate against the truth at each scan.
+pub fn estimate_errors(record: &RunRecord, loc: &LocalisationRecord) -> (f64, f64, f64, f64) {
+    let errors: Vec<(f64, f64)> = loc.errors(&record.scans).collect();
+    let (last_m, last_rad) = errors.last().copied().unwrap_or_default();
+    let n = errors.len().max(1) as f64;
+    let rms =
+        |f: fn(&(f64, f64)) -> f64| (errors.iter().map(|e| f(e).powi(2)).sum::<f64>() / n).sqrt();
+    (
+        last_m,
+        last_rad.to_degrees(),
+        rms(|e| e.0),
+        rms(|e| e.1).to_degrees(),
+    )
+}
+
+impl LocalisationSummary {
+    /// The figures of a run's localisation.
+    pub fn of(record: &RunRecord, loc: &LocalisationRecord) -> Self {
+        let (final_error_m, final_error_deg, rms_error_m, rms_error_deg) =
+            estimate_errors(record, loc);
+        let n = record.scans.len().max(1) as f64;
+        let odometry_rms_error_m = (record
+            .scans
+            .iter()
+            .map(|s| s.odometry.distance(&s.truth).powi(2))
+            .sum::<f64>()
+            / n)
+            .sqrt();
+        let matches: Vec<_> = loc.placed.iter().filter_map(|p| p.matched).collect();
+        LocalisationSummary {
+            matcher: loc.matcher.to_string(),
+            final_error_m,
+            final_error_deg,
+            rms_error_m,
+            rms_error_deg,
+            odometry_rms_error_m,
+            matches: matches.len(),
+            trusted: loc.placed.iter().filter(|p| p.trusted).count(),
+            converged: matches.iter().filter(|m| m.converged).count(),
+            mean_iterations: matches.iter().map(|m| f64::from(m.iterations)).sum::<f64>()
+                / matches.len().max(1) as f64,
+            wall_ms_per_scan: loc.wall_seconds * 1e3 / n,
+        }
+    }
 }
 
 impl Summary {
@@ -56,6 +132,10 @@ impl Summary {
             steps: record.steps,
             collisions: record.collisions,
             motor_battery_charge: record.battery_charge.1,
+            localisation: record
+                .localisation
+                .as_ref()
+                .map(|loc| LocalisationSummary::of(record, loc)),
         }
     }
 

@@ -1,6 +1,7 @@
 //! `map.svg`: the world, the true path, the odometry path, and the scans drawn from both, so the
 //! drift shows at a glance.
 
+use super::summary::estimate_errors;
 use crate::config::{Material, WorldDescription};
 use crate::run::RunRecord;
 use crate::world_map::WorldMap;
@@ -74,6 +75,11 @@ const LEGEND: [(&str, &str); 6] = [
     (PointKind::Ghost.colour(), "ghosts: no surface there"),
     ("#c9c9c9", "walls (blue glass, violet metal)"),
 ];
+/// The legend's entries for the scan-matching estimate, shown when the run localised.
+const ESTIMATE_LEGEND: [(&str, &str); 2] = [
+    ("#6a3d9a", "scan-matching estimate"),
+    ("#b07cd8", "scans placed at the estimate"),
+];
 /// The legend's entry for floor hits, shown when a tilted laser made some.
 const FLOOR_LEGEND: (&str, &str) = (PointKind::Floor.colour(), "floor hits (tilted laser)");
 
@@ -113,10 +119,13 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
     if !points.floor.is_empty() {
         legend.push(FLOOR_LEGEND);
     }
+    if record.localisation.is_some() {
+        legend.extend(ESTIMATE_LEGEND);
+    }
     let width = ((max[0] - min[0] + 2.0 * MARGIN) * SCALE).max(LEGEND_COLUMN + 24.0);
     let columns = (((width - 24.0) / LEGEND_COLUMN).floor() as usize).clamp(1, 3);
     let legend_rows = legend.len().div_ceil(columns);
-    let legend_height = 20.0 * legend_rows as f64 + 50.0;
+    let legend_height = 20.0 * legend_rows as f64 + 68.0;
     let height = (max[1] - min[1] + 2.0 * MARGIN) * SCALE + legend_height;
     let mut s = String::new();
     let _ = writeln!(
@@ -174,6 +183,20 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
         );
     }
 
+    // The scan-matching estimate's map.
+    if let Some(loc) = &record.localisation {
+        let stride = loc.map.len().div_ceil(MAX_POINTS).max(1);
+        let mut d = String::new();
+        for p in loc.map.iter().step_by(stride) {
+            let _ = write!(d, "M{:.1} {:.1}h0", f.x(p[0]), f.y(p[1]));
+        }
+        let _ = writeln!(
+            s,
+            r#"<path d="{d}" stroke="{}" stroke-width="2" stroke-linecap="round" fill="none" opacity="0.8"><title>scans placed at the estimate</title></path>"#,
+            ESTIMATE_LEGEND[1].0
+        );
+    }
+
     // The sonar ring's last reading: a wedge per transducer out to its echo.
     if let Some(sonar) = &record.sonar {
         draw_sonar(&mut s, &f, sonar);
@@ -191,6 +214,11 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
         .chain(record.scans.iter().map(|r| r.odometry))
         .chain(std::iter::once(record.final_odometry))
         .collect();
+    let estimate: Vec<Pose2> = record
+        .localisation
+        .iter()
+        .flat_map(|l| l.placed.iter().map(|p| p.estimate))
+        .collect();
     for (poses, colour, dash, label) in [
         (&truth, "#1a9850", "", "true path"),
         (
@@ -198,6 +226,12 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
             "#d73027",
             r#" stroke-dasharray="6 4""#,
             "odometry",
+        ),
+        (
+            &estimate,
+            ESTIMATE_LEGEND[0].0,
+            r#" stroke-dasharray="2 3""#,
+            "scan-matching estimate",
         ),
     ] {
         let d = path_data(poses.iter().map(|p| (f.x(p.x), f.y(p.y))), false);
@@ -252,6 +286,15 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
         record.final_odometry_error_m(),
         record.final_odometry_error_deg(),
     );
+    if let Some(loc) = &record.localisation {
+        let (final_m, final_deg, rms_m, rms_deg) = estimate_errors(record, loc);
+        let _ = writeln!(
+            s,
+            r#"<text x="12" y="{:.0}">estimate ({}): final error {final_m:.3} m, {final_deg:.2}°; RMS {rms_m:.3} m, {rms_deg:.2}°</text>"#,
+            figures_y + 36.0,
+            loc.matcher,
+        );
+    }
     let bar_x = width - 12.0 - SCALE;
     let bar_y = figures_y + 14.0;
     let _ = writeln!(

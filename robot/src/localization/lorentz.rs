@@ -1,0 +1,283 @@
+//! The Lorentzian scan matcher of the thesis (§3.4, App. F): the robust error
+//! `E = Σ ρσ(e_x,i) + ρσ(e_y,i)`, `ρσ(e) = log(1 + ½ (e/σ)²)`, minimised over `Φ = (θ, tx, ty)` by
+//! Newton–Levenberg–Marquardt, three times with σ = 2, 5 and 0.5 (§5.2); optionally with
+//! line-assisted association (§3.4.3).
+
+use super::lines::{LineParams, lines_of};
+use super::matcher::{Convergence, MatchResult, Reference, ScanMatcher, solve3, transform_all};
+use super::scan::ScanPoints;
+use crate::geometry::{Pose2, wrap_angle};
+
+/// The thesis's σ schedule, in the unit [`Lorentz::SIGMA_UNIT_M`].
+pub const THESIS_SIGMAS: [f64; 3] = [2.0, 5.0, 0.5];
+
+/// The Lorentzian matcher.
+///
+/// Each σ pass alternates a correspondence search (every current point, moved by the estimate,
+/// paired with its nearest reference point — or a point on the reference's local line) with an
+/// NLM minimisation over those pairs, until a search no longer moves the estimate. The NLM is
+/// §3.4.2's: analytic gradient and Hessian (App. F), solve `(A + λI) δΦ = −B`, accept the step
+/// and divide λ by 10 when `E` falls, else multiply λ by 10 and retry; stop when `E` no longer
+/// falls noticeably or λ grows past `lambda_max`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Lorentz {
+    /// σ of each pass, metres. Default: the thesis's 2 → 5 → 0.5 in centimetres (0.02, 0.05,
+    /// 0.005 m); `cargo run --release --example sigma_sweep` shows why centimetres.
+    pub sigmas_m: Vec<f64>,
+    /// λ at the start of each minimisation. Default 0.001.
+    pub lambda0: f64,
+    /// Above this λ no better step exists. Default 1e12.
+    pub lambda_max: f64,
+    /// A minimisation stops when an accepted step lowers `E` by less than this per pair.
+    /// Default 1e-9.
+    pub energy_tolerance: f64,
+    /// Accepted NLM steps allowed per minimisation. Default 30.
+    pub max_steps: u32,
+    /// When a σ pass stops: a search that moves the estimate by under 0.01 mm and 0.0001°, or
+    /// 30 searches.
+    pub convergence: Convergence,
+    /// Line-assisted association, when set.
+    pub lines: Option<LineParams>,
+}
+
+impl Lorentz {
+    /// The unit in which the thesis's σ values work for this laser: centimetres.
+    pub const SIGMA_UNIT_M: f64 = 0.01;
+
+    /// The thesis's schedule with σ counted in `unit_m` metres.
+    pub fn with_sigma_unit(unit_m: f64) -> Self {
+        Lorentz {
+            sigmas_m: THESIS_SIGMAS.iter().map(|s| s * unit_m).collect(),
+            ..Lorentz::default()
+        }
+    }
+
+    /// The default matcher with line-assisted association.
+    pub fn with_lines() -> Self {
+        Lorentz {
+            lines: Some(LineParams::default()),
+            ..Lorentz::default()
+        }
+    }
+
+    /// The Lorentzian error of pairs `(source moved by phi, target)` at scale σ.
+    fn energy(src: &[[f64; 2]], dst: &[[f64; 2]], phi: [f64; 3], two_s2: f64) -> f64 {
+        let (s, c) = phi[0].sin_cos();
+        let inv = 1.0 / two_s2;
+        src.iter()
+            .zip(dst)
+            .map(|(p, q)| {
+                let ex = c * p[0] - s * p[1] + phi[1] - q[0];
+                let ey = s * p[0] + c * p[1] + phi[2] - q[1];
+                ((1.0 + ex * ex * inv) * (1.0 + ey * ey * inv)).ln()
+            })
+            .sum()
+    }
+
+    /// Gradient `B` and Hessian `A` of the error (App. F, F.12–F.13, with the common factor kept).
+    fn derivatives(
+        src: &[[f64; 2]],
+        dst: &[[f64; 2]],
+        phi: [f64; 3],
+        two_s2: f64,
+    ) -> ([f64; 3], [[f64; 3]; 3]) {
+        let (s, c) = phi[0].sin_cos();
+        let (mut g, mut h) = ([0.0; 3], [[0.0; 3]; 3]);
+        for (p, q) in src.iter().zip(dst) {
+            // Rotated point; x' = rx + tx, ∂x'/∂θ = −ry, ∂²x'/∂θ² = −rx; ∂y'/∂θ = rx, ∂²y'/∂θ² = −ry.
+            let rx = c * p[0] - s * p[1];
+            let ry = s * p[0] + c * p[1];
+            let ex = rx + phi[1] - q[0];
+            let ey = ry + phi[2] - q[1];
+            let (dx, dy) = (two_s2 + ex * ex, two_s2 + ey * ey);
+            // ρ'(e) = 2e / D, ρ''(e) = 2 (2σ² − e²) / D².
+            let (wx1, wy1) = (2.0 * ex / dx, 2.0 * ey / dy);
+            let (wx2, wy2) = (
+                2.0 * (two_s2 - ex * ex) / (dx * dx),
+                2.0 * (two_s2 - ey * ey) / (dy * dy),
+            );
+            g[0] += -wx1 * ry + wy1 * rx;
+            g[1] += wx1;
+            g[2] += wy1;
+            h[0][0] += wx2 * ry * ry - wx1 * rx + wy2 * rx * rx - wy1 * ry;
+            h[0][1] += -wx2 * ry;
+            h[0][2] += wy2 * rx;
+            h[1][1] += wx2;
+            h[2][2] += wy2;
+        }
+        h[1][0] = h[0][1];
+        h[2][0] = h[0][2];
+        (g, h)
+    }
+
+    /// Newton–Levenberg–Marquardt on fixed pairs, from `phi`.
+    fn nlm(&self, src: &[[f64; 2]], dst: &[[f64; 2]], mut phi: [f64; 3], sigma: f64) -> [f64; 3] {
+        let two_s2 = 2.0 * sigma * sigma;
+        let tolerance = self.energy_tolerance * src.len() as f64;
+        let mut e = Self::energy(src, dst, phi, two_s2);
+        let mut lambda = self.lambda0;
+        for _ in 0..self.max_steps {
+            let (g, h) = Self::derivatives(src, dst, phi, two_s2);
+            let improvement = loop {
+                let mut a = h;
+                for (k, row) in a.iter_mut().enumerate() {
+                    row[k] += lambda;
+                }
+                if let Some(d) = solve3(a, [-g[0], -g[1], -g[2]]) {
+                    let trial = [phi[0] + d[0], phi[1] + d[1], phi[2] + d[2]];
+                    let e1 = Self::energy(src, dst, trial, two_s2);
+                    if e1 < e {
+                        lambda /= 10.0;
+                        phi = trial;
+                        let gain = e - e1;
+                        e = e1;
+                        break gain;
+                    }
+                }
+                lambda *= 10.0;
+                if lambda > self.lambda_max {
+                    return phi;
+                }
+            };
+            if improvement < tolerance {
+                break;
+            }
+        }
+        phi
+    }
+}
+
+impl Default for Lorentz {
+    fn default() -> Self {
+        Lorentz {
+            sigmas_m: THESIS_SIGMAS
+                .iter()
+                .map(|s| s * Lorentz::SIGMA_UNIT_M)
+                .collect(),
+            lambda0: 0.001,
+            lambda_max: 1e12,
+            energy_tolerance: 1e-9,
+            max_steps: 30,
+            convergence: Convergence {
+                translation_m: 1e-5,
+                rotation_rad: 1e-4_f64.to_radians(),
+                max_iterations: 30,
+            },
+            lines: None,
+        }
+    }
+}
+
+impl ScanMatcher for Lorentz {
+    fn name(&self) -> &'static str {
+        if self.lines.is_some() {
+            "lorentz-lines"
+        } else {
+            "lorentz"
+        }
+    }
+
+    fn align(&self, reference: &Reference, current: &ScanPoints, guess: Pose2) -> MatchResult {
+        if reference.points.is_empty() || current.is_empty() {
+            return MatchResult::unmatched(guess);
+        }
+        let lines = self
+            .lines
+            .as_ref()
+            .map(|params| (lines_of(&reference.points.xy, params), params.end_margin_m));
+        let mut phi = [guess.theta, guess.x, guess.y];
+        let mut moved = Vec::with_capacity(current.len());
+        let mut targets = Vec::with_capacity(current.len());
+        let mut hints = vec![None; current.len()];
+        let mut result = MatchResult::unmatched(guess);
+        for &sigma in &self.sigmas_m {
+            result.converged = false;
+            for _ in 0..self.convergence.max_iterations {
+                result.iterations += 1;
+                let pose = Pose2::new(phi[1], phi[2], phi[0]);
+                transform_all(&pose, &current.xy, &mut moved);
+                targets.clear();
+                for (i, p) in moved.iter().enumerate() {
+                    let (j, d2) = reference
+                        .tree
+                        .nearest_from(*p, hints[i])
+                        .expect("non-empty reference");
+                    hints[i] = Some(j);
+                    let mut target = reference.points.xy[j];
+                    if let Some((lines, margin)) = &lines
+                        && let Some(line) = &lines[j]
+                    {
+                        let on_line = line.project(*p, *margin);
+                        let (dx, dy) = (on_line[0] - p[0], on_line[1] - p[1]);
+                        if dx * dx + dy * dy < d2 {
+                            target = on_line;
+                        }
+                    }
+                    targets.push(target);
+                }
+                result.correspondences = targets.len();
+                let before = phi;
+                phi = self.nlm(&current.xy, &targets, phi, sigma);
+                let step = Pose2::new(
+                    phi[1] - before[1],
+                    phi[2] - before[2],
+                    wrap_angle(phi[0] - before[0]),
+                );
+                if self.convergence.reached(&step) {
+                    result.converged = true;
+                    break;
+                }
+            }
+        }
+        result.pose = Pose2::new(phi[1], phi[2], wrap_angle(phi[0]));
+        result
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The analytic gradient and Hessian agree with finite differences of the energy.
+    #[test]
+    fn derivatives_match_finite_differences() {
+        let src: Vec<[f64; 2]> = (0..40)
+            .map(|i| [1.0 + 0.1 * i as f64, (i as f64 * 0.7).sin()])
+            .collect();
+        let dst: Vec<[f64; 2]> = src
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                [
+                    p[0] + 0.03 * (i as f64).cos(),
+                    p[1] - 0.02 + 0.01 * (i % 3) as f64,
+                ]
+            })
+            .collect();
+        let phi = [0.05, 0.02, -0.01];
+        let two_s2 = 2.0 * 0.03f64.powi(2);
+        let (g, h) = Lorentz::derivatives(&src, &dst, phi, two_s2);
+        let e = |p: [f64; 3]| Lorentz::energy(&src, &dst, p, two_s2);
+        let eps = 1e-6;
+        for k in 0..3 {
+            let (mut up, mut down) = (phi, phi);
+            up[k] += eps;
+            down[k] -= eps;
+            let numeric = (e(up) - e(down)) / (2.0 * eps);
+            assert!(
+                (numeric - g[k]).abs() < 1e-4 * g[k].abs().max(1.0),
+                "g[{k}]"
+            );
+            let (gu, _) = Lorentz::derivatives(&src, &dst, up, two_s2);
+            let (gd, _) = Lorentz::derivatives(&src, &dst, down, two_s2);
+            for m in 0..3 {
+                let numeric = (gu[m] - gd[m]) / (2.0 * eps);
+                assert!(
+                    (numeric - h[m][k]).abs() < 1e-3 * h[m][k].abs().max(1.0),
+                    "h[{m}][{k}]: {numeric} vs {}",
+                    h[m][k]
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,234 @@
+//! The one interface every scan matcher implements, and the pieces they share.
+
+use super::kdtree::KdTree;
+use super::scan::{RangeScan, ScanPoints};
+use crate::geometry::Pose2;
+use std::fmt;
+use std::str::FromStr;
+
+/// What a match found.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct MatchResult {
+    /// The pose of the current scan's frame in the reference scan's frame.
+    pub pose: Pose2,
+    /// Correspondence searches made (each followed by a minimisation).
+    pub iterations: u32,
+    /// Whether the last step was below the convergence thresholds before the iteration cap.
+    pub converged: bool,
+    /// Correspondences used by the last minimisation.
+    pub correspondences: usize,
+}
+
+impl MatchResult {
+    /// The answer when there is nothing to match: the guess, not converged.
+    pub fn unmatched(guess: Pose2) -> Self {
+        MatchResult {
+            pose: guess,
+            iterations: 0,
+            converged: false,
+            correspondences: 0,
+        }
+    }
+}
+
+/// A reference scan prepared for matching: its points and a k-d tree over them.
+#[derive(Clone, Debug, Default)]
+pub struct Reference {
+    /// The points, in beam order.
+    pub points: ScanPoints,
+    /// A k-d tree over `points.xy`.
+    pub tree: KdTree,
+}
+
+impl Reference {
+    /// Prepares `points` as a reference.
+    pub fn new(points: ScanPoints) -> Self {
+        let tree = KdTree::new(&points.xy);
+        Reference { points, tree }
+    }
+}
+
+/// A scan matcher: given a reference scan, a current scan and an initial guess, the rigid
+/// transform of the current scan's frame in the reference frame.
+///
+/// Implementations are plain data (their parameters) and may be shared between threads.
+pub trait ScanMatcher: Send + Sync + fmt::Debug {
+    /// The short name (`ls`, `lorentz`, `lorentz-lines`, `mbicp`).
+    fn name(&self) -> &'static str;
+
+    /// Aligns `current` (points in its own laser frame) to a prepared `reference`, starting
+    /// from `guess` (the pose of the current frame in the reference frame).
+    fn align(&self, reference: &Reference, current: &ScanPoints, guess: Pose2) -> MatchResult;
+
+    /// Aligns two range scans: only beams that returned enter the match.
+    fn match_scans(&self, reference: &RangeScan, current: &RangeScan, guess: Pose2) -> MatchResult {
+        self.align(
+            &Reference::new(reference.points()),
+            &current.points(),
+            guess,
+        )
+    }
+}
+
+/// When an iterative matcher stops.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Convergence {
+    /// A step shorter than this (metres) …
+    pub translation_m: f64,
+    /// … and turning less than this (radians) ends the iterations.
+    pub rotation_rad: f64,
+    /// Correspondence searches allowed.
+    pub max_iterations: u32,
+}
+
+impl Convergence {
+    /// Whether a step is small enough to stop.
+    pub fn reached(&self, step: &Pose2) -> bool {
+        step.x.hypot(step.y) < self.translation_m && step.theta.abs() < self.rotation_rad
+    }
+}
+
+/// The four matchers by name.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+pub enum MatcherKind {
+    /// Point-to-point least-squares ICP.
+    #[serde(rename = "ls")]
+    LeastSquares,
+    /// The Lorentzian estimator minimised by Newton–Levenberg–Marquardt (thesis §3.4).
+    #[serde(rename = "lorentz")]
+    Lorentz,
+    /// The Lorentzian with line-assisted association (thesis §3.4.3, App. E.3).
+    #[serde(rename = "lorentz-lines")]
+    LorentzLines,
+    /// Metric-based ICP (Minguez et al.; 002 §2.2).
+    #[serde(rename = "mbicp")]
+    Mbicp,
+}
+
+impl MatcherKind {
+    /// Every matcher, in the order of the issue.
+    pub const ALL: [MatcherKind; 4] = [
+        MatcherKind::LeastSquares,
+        MatcherKind::Lorentz,
+        MatcherKind::LorentzLines,
+        MatcherKind::Mbicp,
+    ];
+
+    /// The short name.
+    pub fn name(self) -> &'static str {
+        match self {
+            MatcherKind::LeastSquares => "ls",
+            MatcherKind::Lorentz => "lorentz",
+            MatcherKind::LorentzLines => "lorentz-lines",
+            MatcherKind::Mbicp => "mbicp",
+        }
+    }
+
+    /// The matcher with its default parameters.
+    pub fn build(self) -> Box<dyn ScanMatcher> {
+        match self {
+            MatcherKind::LeastSquares => Box::new(super::LeastSquares::default()),
+            MatcherKind::Lorentz => Box::new(super::Lorentz::default()),
+            MatcherKind::LorentzLines => Box::new(super::Lorentz::with_lines()),
+            MatcherKind::Mbicp => Box::new(super::Mbicp::default()),
+        }
+    }
+}
+
+impl fmt::Display for MatcherKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A matcher name that is not one of the four.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown matcher `{0}`: expected one of ls, lorentz, lorentz-lines, mbicp")]
+pub struct UnknownMatcher(pub String);
+
+impl FromStr for MatcherKind {
+    type Err = UnknownMatcher;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        MatcherKind::ALL
+            .into_iter()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| UnknownMatcher(s.to_string()))
+    }
+}
+
+/// Solves the 3×3 system `a · x = b` by Gaussian elimination with partial pivoting; `None` when
+/// it is singular (or not finite).
+pub(crate) fn solve3(mut a: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
+    let scale = a
+        .iter()
+        .flatten()
+        .fold(0.0f64, |m, v| m.max(v.abs()))
+        .max(f64::MIN_POSITIVE);
+    for col in 0..3 {
+        let pivot = (col..3).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
+        if a[pivot][col].abs().is_nan() || a[pivot][col].abs() <= 1e-13 * scale {
+            return None;
+        }
+        a.swap(col, pivot);
+        b.swap(col, pivot);
+        for row in col + 1..3 {
+            let f = a[row][col] / a[col][col];
+            let pivot_row = a[col];
+            for (v, p) in a[row].iter_mut().zip(pivot_row).skip(col) {
+                *v -= f * p;
+            }
+            b[row] -= f * b[col];
+        }
+    }
+    let mut x = [0.0; 3];
+    for row in (0..3).rev() {
+        let tail: f64 = (row + 1..3).map(|k| a[row][k] * x[k]).sum();
+        x[row] = (b[row] - tail) / a[row][row];
+    }
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+/// Applies a pose to every point: `out[i] = pose ⊕ points[i]`.
+pub(crate) fn transform_all(pose: &Pose2, points: &[[f64; 2]], out: &mut Vec<[f64; 2]>) {
+    let (s, c) = pose.theta.sin_cos();
+    out.clear();
+    out.extend(
+        points
+            .iter()
+            .map(|p| [pose.x + c * p[0] - s * p[1], pose.y + s * p[0] + c * p[1]]),
+    );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn solve3_solves_and_refuses_singular() {
+        let a = [[4.0, 1.0, 0.5], [1.0, 3.0, 0.2], [0.5, 0.2, 2.0]];
+        let x = [1.0, -2.0, 0.5];
+        let b = [0, 1, 2].map(|r| (0..3).map(|k| a[r][k] * x[k]).sum::<f64>());
+        let got = solve3(a, b).unwrap();
+        for k in 0..3 {
+            assert!((got[k] - x[k]).abs() < 1e-12);
+        }
+        assert!(
+            solve3(
+                [[1.0, 2.0, 3.0], [2.0, 4.0, 6.0], [0.0, 0.0, 1.0]],
+                [1.0; 3]
+            )
+            .is_none()
+        );
+    }
+
+    #[test]
+    fn names_round_trip() {
+        for kind in MatcherKind::ALL {
+            assert_eq!(kind.name().parse::<MatcherKind>(), Ok(kind));
+            assert_eq!(kind.build().name(), kind.name());
+        }
+        let err = "icp".parse::<MatcherKind>().unwrap_err();
+        assert!(err.to_string().contains("lorentz-lines"), "{err}");
+    }
+}

@@ -1,0 +1,33 @@
+//! Localisation by scan matching, and 2D maps — the same code on the twin and the real robot.
+//!
+//! The problem (thesis §3.3): given a reference scan `l_j`, a current scan `l_{j+1}` and a guess
+//! from odometry, find the rigid transform `Φ = (θ, tx, ty)` of the current scan's frame in the
+//! reference's frame. Four matchers implement [`ScanMatcher`]:
+//!
+//! | name | what | source |
+//! |---|---|---|
+//! | `ls` | [`LeastSquares`] point-to-point ICP, the baseline | thesis §5.2 |
+//! | `lorentz` | [`Lorentz`]: Lorentzian error, Newton–Levenberg–Marquardt, σ 2 → 5 → 0.5 cm | thesis §3.4, App. F |
+//! | `lorentz-lines` | the same with line-assisted association | thesis §3.4.3, App. E.3 |
+//! | `mbicp` | [`Mbicp`]: metric-based ICP | 002 §2.2 |
+//!
+//! Correspondences come from a [`KdTree`] over the reference's points. [`MapBuilder`] chains
+//! matches into a trajectory and a point map (§3.5), with odometry queued and interpolated to
+//! each scan's stamp (002 §7.3.3). Everything is in metres and radians, in REP-103 axes.
+
+mod icp;
+mod kdtree;
+pub mod lines;
+mod lorentz;
+mod map;
+mod matcher;
+mod mbicp;
+mod scan;
+
+pub use icp::LeastSquares;
+pub use kdtree::KdTree;
+pub use lorentz::{Lorentz, THESIS_SIGMAS};
+pub use map::{MapBuilder, MapConfig, Placed};
+pub use matcher::{Convergence, MatchResult, MatcherKind, Reference, ScanMatcher, UnknownMatcher};
+pub use mbicp::Mbicp;
+pub use scan::{RangeScan, ScanPoints};

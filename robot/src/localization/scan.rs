@@ -1,0 +1,110 @@
+//! A range scan as the matchers see it: ranges in metres, and the Cartesian points of the beams
+//! that returned something.
+
+use crate::hardware::LaserScan;
+use crate::time::Stamp;
+use serde::{Deserialize, Serialize};
+
+/// One planar range scan in SI units, in the laser frame (x forward, y left, counter-clockwise).
+///
+/// Beam `i` points at `angle_min + i · angle_increment`. A range that is not finite, not positive,
+/// or `>= range_max` means the beam returned nothing: such beams never enter a match.
+///
+/// ```
+/// use robot::localization::RangeScan;
+/// let scan = RangeScan::new(-0.5, 0.5, 10.0, vec![1.0, 10.0, 2.0]);
+/// let points = scan.points();
+/// assert_eq!(points.len(), 2); // the 10 m beam is a no-return
+/// assert!((points.xy[1][0] - 2.0 * 0.5f64.cos()).abs() < 1e-12);
+/// assert_eq!(points.beam, vec![0, 2]);
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RangeScan {
+    /// When the scan was measured.
+    #[serde(default, skip_serializing)]
+    pub stamp: Stamp,
+    /// Angle of the first beam, radians.
+    pub angle_min: f64,
+    /// Angle between consecutive beams, radians.
+    pub angle_increment: f64,
+    /// Ranges at or beyond this are no returns, metres.
+    pub range_max: f64,
+    /// One range per beam, metres.
+    pub ranges: Vec<f64>,
+}
+
+impl RangeScan {
+    /// A scan stamped at zero.
+    pub fn new(angle_min: f64, angle_increment: f64, range_max: f64, ranges: Vec<f64>) -> Self {
+        RangeScan {
+            stamp: Stamp::ZERO,
+            angle_min,
+            angle_increment,
+            range_max,
+            ranges,
+        }
+    }
+
+    /// The same scan with a stamp.
+    pub fn stamped(mut self, stamp: Stamp) -> Self {
+        self.stamp = stamp;
+        self
+    }
+
+    /// Whether beam `i`'s range is a real return.
+    pub fn returned(&self, i: usize) -> bool {
+        self.ranges
+            .get(i)
+            .is_some_and(|&r| r.is_finite() && r > 0.0 && r < self.range_max)
+    }
+
+    /// The end points of the beams that returned, in beam order.
+    pub fn points(&self) -> ScanPoints {
+        let mut points = ScanPoints::default();
+        for (i, &r) in self.ranges.iter().enumerate() {
+            if self.returned(i) {
+                let (s, c) = (self.angle_min + i as f64 * self.angle_increment).sin_cos();
+                points.xy.push([r * c, r * s]);
+                points.beam.push(i);
+            }
+        }
+        points
+    }
+}
+
+impl From<&LaserScan> for RangeScan {
+    fn from(scan: &LaserScan) -> Self {
+        RangeScan {
+            stamp: scan.stamp,
+            angle_min: scan.angle_min,
+            angle_increment: scan.angle_increment,
+            range_max: scan.range_max_m(),
+            ranges: scan
+                .ranges_mm
+                .iter()
+                .map(|&mm| f64::from(mm) * 1e-3)
+                .collect(),
+        }
+    }
+}
+
+/// The returned points of one scan, metres, in beam order, with the beam each came from.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ScanPoints {
+    /// `[x, y]` of each point in the laser frame.
+    pub xy: Vec<[f64; 2]>,
+    /// The beam index of each point.
+    pub beam: Vec<usize>,
+}
+
+impl ScanPoints {
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.xy.len()
+    }
+
+    /// Whether there is no point.
+    pub fn is_empty(&self) -> bool {
+        self.xy.is_empty()
+    }
+}

@@ -1,0 +1,178 @@
+//! CARMEN logs: `FLASER` (old front laser), `ROBOTLASER1`, `ODOM`; comments and other records
+//! are skipped and counted.
+//!
+//! ```text
+//! FLASER n r_1 … r_n x y theta odom_x odom_y odom_theta ipc_timestamp ipc_hostname logger_timestamp
+//! ROBOTLASER1 type start_angle fov resolution max_range accuracy remission_mode
+//!             n r_1 … r_n m v_1 … v_m laser_x laser_y laser_theta robot_x robot_y robot_theta
+//!             tv rv forward_safety side_safety turn_axis ipc_timestamp ipc_hostname logger_timestamp
+//! ODOM x y theta tv rv accel ipc_timestamp ipc_hostname logger_timestamp
+//! ```
+//!
+//! Ranges are metres; a reading at or beyond the maximum (81.91 m for a SICK in centimetre mode)
+//! is a no-return. An `FLASER` spans 180° from −90°.
+
+use super::{Cursor, LogError, LogEvent, LogFormat, RecordedLog};
+use crate::geometry::Pose2;
+use crate::localization::RangeScan;
+use crate::time::Stamp;
+use std::f64::consts::{FRAC_PI_2, PI};
+
+/// An FLASER reading at or beyond this is a no-return, metres.
+pub const FLASER_RANGE_MAX_M: f64 = 81.9;
+
+pub(super) fn parse(text: &str, file: &str) -> Result<RecordedLog, LogError> {
+    let mut log = RecordedLog::new(LogFormat::Carmen);
+    let mut mount_known = false;
+    for (index, line) in text.lines().enumerate() {
+        let at = Cursor {
+            file,
+            line: index + 1,
+        };
+        let mut fields = line.split_whitespace();
+        let Some(kind) = fields.next() else { continue };
+        match kind {
+            "FLASER" => {
+                let n = count(&at, fields.next(), "number of readings")?;
+                let ranges = numbers(&at, &mut fields, n, "range")?;
+                let _laser = pose(&at, &mut fields, "x y theta")?;
+                let odom = pose(&at, &mut fields, "odom_x odom_y odom_theta")?;
+                let stamp = stamp(&at, fields.next())?;
+                let increment = if n > 1 { PI / (n - 1) as f64 } else { 0.0 };
+                log.events.push(LogEvent::Odometry { stamp, pose: odom });
+                log.events.push(LogEvent::Scan(
+                    RangeScan::new(-FRAC_PI_2, increment, FLASER_RANGE_MAX_M, ranges)
+                        .stamped(stamp),
+                ));
+            }
+            "ROBOTLASER1" => {
+                let _type = at.number(fields.next(), "laser_type")?;
+                let start = at.number(fields.next(), "start_angle")?;
+                let _fov = at.number(fields.next(), "field_of_view")?;
+                let resolution = at.number(fields.next(), "angular_resolution")?;
+                let max_range = at.number(fields.next(), "maximum_range")?;
+                let _accuracy = at.number(fields.next(), "accuracy")?;
+                let _remission = at.number(fields.next(), "remission_mode")?;
+                let n = count(&at, fields.next(), "number of readings")?;
+                let ranges = numbers(&at, &mut fields, n, "range")?;
+                let m = count(&at, fields.next(), "number of remissions")?;
+                numbers(&at, &mut fields, m, "remission")?;
+                let laser = pose(
+                    &at,
+                    &mut fields,
+                    "laser_pose_x laser_pose_y laser_pose_theta",
+                )?;
+                let robot = pose(
+                    &at,
+                    &mut fields,
+                    "robot_pose_x robot_pose_y robot_pose_theta",
+                )?;
+                for what in [
+                    "tv",
+                    "rv",
+                    "forward_safety_dist",
+                    "side_safety_dist",
+                    "turn_axis",
+                ] {
+                    at.number(fields.next(), what)?;
+                }
+                let stamp = stamp(&at, fields.next())?;
+                if !mount_known {
+                    log.mount = robot.relative(&laser);
+                    mount_known = true;
+                }
+                log.events.push(LogEvent::Odometry { stamp, pose: robot });
+                log.events.push(LogEvent::Scan(
+                    RangeScan::new(start, resolution, max_range, ranges).stamped(stamp),
+                ));
+            }
+            "ODOM" => {
+                let odom = pose(&at, &mut fields, "x y theta")?;
+                for what in ["tv", "rv", "accel"] {
+                    at.number(fields.next(), what)?;
+                }
+                let stamp = stamp(&at, fields.next())?;
+                log.events.push(LogEvent::Odometry { stamp, pose: odom });
+            }
+            _ if kind.starts_with('#') => log.skip("#"),
+            other => log.skip(other),
+        }
+    }
+    Ok(log)
+}
+
+fn count(at: &Cursor<'_>, text: Option<&str>, what: &str) -> Result<usize, LogError> {
+    let v = at.number(text, what)?;
+    if v < 0.0 || v.fract() != 0.0 || v > 100_000.0 {
+        return Err(at.error(format!("{what} `{v}` is not a count of readings")));
+    }
+    Ok(v as usize)
+}
+
+fn numbers<'a>(
+    at: &Cursor<'_>,
+    fields: &mut impl Iterator<Item = &'a str>,
+    n: usize,
+    what: &str,
+) -> Result<Vec<f64>, LogError> {
+    (0..n)
+        .map(|i| at.number(fields.next(), &format!("{what} {} of {n}", i + 1)))
+        .collect()
+}
+
+fn pose<'a>(
+    at: &Cursor<'_>,
+    fields: &mut impl Iterator<Item = &'a str>,
+    what: &str,
+) -> Result<Pose2, LogError> {
+    let mut names = what.split(' ');
+    let mut next = || at.number(fields.next(), names.next().unwrap_or(what));
+    Ok(Pose2::new(next()?, next()?, next()?))
+}
+
+fn stamp(at: &Cursor<'_>, text: Option<&str>) -> Result<Stamp, LogError> {
+    let secs = at.number(text, "ipc_timestamp")?;
+    if secs < 0.0 {
+        return Err(at.error(format!("ipc_timestamp `{secs}` is negative")));
+    }
+    Ok(Stamp::from_secs_f64(secs))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flaser_odom_and_unknown_lines() {
+        let text = "# a comment\nPARAM robot_x 1\nFLASER 3 1.0 81.91 2.0 0.1 0.2 0.3 0.1 0.2 0.3 1000.5 host 0.1\n\
+                    ODOM 1 2 0.5 0 0 0 1001.25 host 0.2\nSYNC x\n";
+        let log = parse(text, "t.clf").unwrap();
+        assert_eq!(log.scans(), 1);
+        assert_eq!(log.odometry_samples(), 2);
+        assert_eq!(log.skipped_lines(), 3);
+        let LogEvent::Scan(scan) = &log.events[1] else {
+            panic!("{:?}", log.events)
+        };
+        assert_eq!(scan.points().len(), 2, "81.91 is a no-return");
+        assert!((scan.angle_min + FRAC_PI_2).abs() < 1e-12);
+        assert!((scan.angle_increment - FRAC_PI_2).abs() < 1e-12);
+        assert_eq!(scan.stamp, Stamp::from_secs_f64(1000.5));
+    }
+
+    #[test]
+    fn malformed_lines_are_named() {
+        let err = parse("FLASER 3 1.0 2.0\n", "t.clf")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("t.clf:1:") && err.contains("range 3 of 3"),
+            "{err}"
+        );
+        let err = parse("\n\nODOM 1 x 0 0 0 0 5 h 1\n", "t.clf")
+            .unwrap_err()
+            .to_string();
+        assert!(err.starts_with("t.clf:3:") && err.contains("`x`"), "{err}");
+        let err = parse("FLASER -2\n", "t.clf").unwrap_err().to_string();
+        assert!(err.contains("count"), "{err}");
+    }
+}

@@ -1,0 +1,196 @@
+//! Readers of recorded runs: CARMEN logs (`.clf`) and the two formats of 002 App. C
+//! (`.script` and RobotLogger `.log`).
+//!
+//! Each reader turns a file into a [`RecordedLog`]: odometry samples and scans in file order,
+//! in SI units and REP-103 axes, plus the laser's mount and a count of the lines it skipped.
+//! A line that claims to be a known record but cannot be read is an error naming the file, the
+//! line and what was expected; lines of unknown kinds are skipped and counted.
+
+mod carmen;
+mod robotlogger;
+mod script;
+
+use crate::geometry::Pose2;
+use crate::localization::{RangeScan, ScanPoints};
+use crate::time::Stamp;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// One record of a log.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LogEvent {
+    /// The base's odometry pose at a time.
+    Odometry {
+        /// When.
+        stamp: Stamp,
+        /// The pose in the odometry frame.
+        pose: Pose2,
+    },
+    /// A range scan.
+    Scan(RangeScan),
+    /// A scan given as Cartesian points in the laser frame (RobotLogger).
+    Points {
+        /// When.
+        stamp: Stamp,
+        /// The points, in scan order.
+        points: ScanPoints,
+    },
+}
+
+/// The formats understood.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum LogFormat {
+    /// CARMEN (`FLASER`, `ROBOTLASER1`, `ODOM`).
+    Carmen,
+    /// 002's `.script` (`POS`, `LASER-RANGE`).
+    Script,
+    /// 002's RobotLogger `.log` (`odometry:`, `laser-scan:`, `laser-geometry:`).
+    RobotLogger,
+}
+
+/// A log read into memory.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RecordedLog {
+    /// Which format it was.
+    pub format: LogFormat,
+    /// The laser's pose on the base (identity when the log does not say).
+    pub mount: Pose2,
+    /// The records, in file order.
+    pub events: Vec<LogEvent>,
+    /// Lines skipped, by their first word.
+    pub skipped: BTreeMap<String, usize>,
+}
+
+impl RecordedLog {
+    fn new(format: LogFormat) -> Self {
+        RecordedLog {
+            format,
+            mount: Pose2::IDENTITY,
+            events: Vec::new(),
+            skipped: BTreeMap::new(),
+        }
+    }
+
+    fn skip(&mut self, kind: &str) {
+        *self.skipped.entry(kind.to_string()).or_default() += 1;
+    }
+
+    /// Number of scans (ranges or points).
+    pub fn scans(&self) -> usize {
+        self.events
+            .iter()
+            .filter(|e| !matches!(e, LogEvent::Odometry { .. }))
+            .count()
+    }
+
+    /// Number of odometry samples.
+    pub fn odometry_samples(&self) -> usize {
+        self.events.len() - self.scans()
+    }
+
+    /// Lines skipped in total.
+    pub fn skipped_lines(&self) -> usize {
+        self.skipped.values().sum()
+    }
+}
+
+/// Why a log cannot be read.
+#[derive(Debug, thiserror::Error)]
+pub enum LogError {
+    /// The file cannot be read.
+    #[error("{file}: {source}")]
+    Io {
+        /// The file.
+        file: String,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A line is not what its kind requires.
+    #[error("{file}:{line}: {message}")]
+    Malformed {
+        /// The file.
+        file: String,
+        /// Line number, from 1.
+        line: usize,
+        /// What was wrong and what was expected.
+        message: String,
+    },
+    /// Neither the extension nor the content says which format the file is.
+    #[error(
+        "{file}: unknown log format: expected a CARMEN .clf, a .script (POS/LASER-RANGE) or a RobotLogger .log"
+    )]
+    UnknownFormat {
+        /// The file.
+        file: String,
+    },
+}
+
+/// Where a parser is, for error messages.
+pub(crate) struct Cursor<'a> {
+    file: &'a str,
+    line: usize,
+}
+
+impl Cursor<'_> {
+    fn error(&self, message: impl Into<String>) -> LogError {
+        LogError::Malformed {
+            file: self.file.to_string(),
+            line: self.line,
+            message: message.into(),
+        }
+    }
+
+    /// Parses field `what` as a finite number.
+    fn number(&self, text: Option<&str>, what: &str) -> Result<f64, LogError> {
+        let text = text.ok_or_else(|| self.error(format!("missing {what} (line ends early)")))?;
+        match text.trim().parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            _ => Err(self.error(format!("{what} `{text}` is not a number"))),
+        }
+    }
+}
+
+/// Reads a log, choosing the format by extension (`.clf`, `.script`, `.log`) or, failing that,
+/// by the first record.
+pub fn read_log(path: &Path) -> Result<RecordedLog, LogError> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|source| LogError::Io {
+        file: file.clone(),
+        source,
+    })?;
+    let format = match path.extension().and_then(|e| e.to_str()) {
+        Some("clf") => Some(LogFormat::Carmen),
+        Some("script") => Some(LogFormat::Script),
+        Some("log") if text.contains("laser-scan:") || text.contains("odometry:") => {
+            Some(LogFormat::RobotLogger)
+        }
+        _ => sniff(&text),
+    };
+    parse_log(
+        &text,
+        format.ok_or(LogError::UnknownFormat { file: file.clone() })?,
+        &file,
+    )
+}
+
+/// Parses log text in a known format; `file` names it in errors.
+pub fn parse_log(text: &str, format: LogFormat, file: &str) -> Result<RecordedLog, LogError> {
+    match format {
+        LogFormat::Carmen => carmen::parse(text, file),
+        LogFormat::Script => script::parse(text, file),
+        LogFormat::RobotLogger => robotlogger::parse(text, file),
+    }
+}
+
+fn sniff(text: &str) -> Option<LogFormat> {
+    text.lines().find_map(|line| {
+        let word = line.split_whitespace().next()?;
+        match word {
+            "FLASER" | "ROBOTLASER1" | "ODOM" | "PARAM" => Some(LogFormat::Carmen),
+            "POS" | "LASER-RANGE" => Some(LogFormat::Script),
+            "odometry:" | "laser-scan:" | "laser-geometry:" => Some(LogFormat::RobotLogger),
+            _ => None,
+        }
+    })
+}

@@ -1,0 +1,231 @@
+//! Localisation over recorded data: `twin map` (a log through the map builder) and `twin match`
+//! (scan pairs as JSON Lines through one matcher).
+
+use crate::output::logmap::{Panel, occupied_cells, write_log_map_svg};
+use crate::output::write_tum;
+use robot::Pose2;
+use robot::localization::{MapBuilder, MapConfig, MatcherKind, RangeScan, ScanMatcher};
+use robot::logs::{LogEvent, RecordedLog};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// What the map builder made of a log.
+#[derive(Clone, Debug)]
+pub struct Replay {
+    /// The matcher used.
+    pub matcher: MatcherKind,
+    /// Each scan: stamp, estimate and odometry (odometry re-based so the first scan is at the
+    /// origin, like the estimate).
+    pub placed: Vec<robot::localization::Placed>,
+    /// The estimate's point map.
+    pub map: Vec<[f64; 2]>,
+    /// The same scans placed by odometry alone.
+    pub odometry_map: Vec<[f64; 2]>,
+    /// Wall-clock seconds spent in the map builder.
+    pub wall_seconds: f64,
+}
+
+/// Runs the map builder over a log; `progress(done, total)` is called as events are consumed.
+pub fn replay_log(
+    log: &RecordedLog,
+    matcher: MatcherKind,
+    config: MapConfig,
+    mut progress: impl FnMut(usize, usize),
+) -> Replay {
+    let config = MapConfig {
+        mount: log.mount,
+        ..config
+    };
+    let mut builder = MapBuilder::new(matcher.build(), config);
+    let mut wall = 0.0;
+    let total = log.events.len();
+    let mut scans: Vec<robot::localization::ScanPoints> = Vec::new();
+    for (i, event) in log.events.iter().enumerate() {
+        let clock = Instant::now();
+        match event {
+            LogEvent::Odometry { stamp, pose } => builder.push_odometry(*stamp, *pose),
+            LogEvent::Scan(scan) => {
+                scans.push(scan.points());
+                builder.push_scan(scan.clone());
+            }
+            LogEvent::Points { stamp, points } => {
+                scans.push(points.clone());
+                builder.push_points(*stamp, points.clone());
+            }
+        }
+        wall += clock.elapsed().as_secs_f64();
+        if i % 64 == 0 {
+            progress(i, total);
+        }
+    }
+    let clock = Instant::now();
+    builder.finish();
+    wall += clock.elapsed().as_secs_f64();
+    progress(total, total);
+    // Odometry re-based on the first scan, and the scans placed by it.
+    let placed: Vec<_> = builder.placed().to_vec();
+    let origin = placed.first().map_or(Pose2::IDENTITY, |p| p.odometry);
+    let placed: Vec<_> = placed
+        .into_iter()
+        .map(|mut p| {
+            p.odometry = origin.relative(&p.odometry);
+            p
+        })
+        .collect();
+    let mut odometry_map = Vec::new();
+    for (p, points) in placed.iter().zip(&scans) {
+        let laser = p.odometry.compose(&log.mount);
+        odometry_map.extend(points.xy.iter().map(|q| {
+            let (x, y) = laser.transform_point(q[0], q[1]);
+            [x, y]
+        }));
+    }
+    Replay {
+        matcher,
+        placed,
+        map: builder.map_points().to_vec(),
+        odometry_map,
+        wall_seconds: wall,
+    }
+}
+
+/// The figures `twin map` reports in `summary.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct ReplaySummary {
+    /// The log file.
+    pub log: String,
+    /// The matcher.
+    pub matcher: String,
+    /// Scans placed.
+    pub scans: usize,
+    /// Matches trusted (enough correspondences).
+    pub trusted: usize,
+    /// Matches that converged before their cap.
+    pub converged: usize,
+    /// Mean correspondence searches per match.
+    pub mean_iterations: f64,
+    /// Lines of the log skipped, by kind.
+    pub skipped: std::collections::BTreeMap<String, usize>,
+    /// Wall-clock seconds in the map builder (machine-dependent).
+    pub wall_seconds: f64,
+    /// Wall-clock milliseconds per scan (machine-dependent).
+    pub ms_per_scan: f64,
+    /// 5 cm cells occupied by the map placed by odometry.
+    pub odometry_cells: usize,
+    /// 5 cm cells occupied by the map placed by the estimate (fewer: sharper).
+    pub estimate_cells: usize,
+}
+
+impl Replay {
+    /// The summary of the replay of `log` from file `name`.
+    pub fn summary(&self, name: &str, log: &RecordedLog) -> ReplaySummary {
+        let matches: Vec<_> = self.placed.iter().filter_map(|p| p.matched).collect();
+        ReplaySummary {
+            log: name.to_string(),
+            matcher: self.matcher.to_string(),
+            scans: self.placed.len(),
+            trusted: self.placed.iter().filter(|p| p.trusted).count(),
+            converged: matches.iter().filter(|m| m.converged).count(),
+            mean_iterations: matches.iter().map(|m| f64::from(m.iterations)).sum::<f64>()
+                / matches.len().max(1) as f64,
+            skipped: log.skipped.clone(),
+            wall_seconds: self.wall_seconds,
+            ms_per_scan: self.wall_seconds * 1e3 / self.placed.len().max(1) as f64,
+            odometry_cells: occupied_cells(&self.odometry_map).len(),
+            estimate_cells: occupied_cells(&self.map).len(),
+        }
+    }
+
+    /// Writes `estimate.tum`, `odometry.tum`, `map.svg` and `summary.json` into `dir`.
+    pub fn write(&self, dir: &Path, summary: &ReplaySummary) -> std::io::Result<Vec<PathBuf>> {
+        std::fs::create_dir_all(dir)?;
+        let files =
+            ["estimate.tum", "odometry.tum", "map.svg", "summary.json"].map(|f| dir.join(f));
+        write_tum(&files[0], self.placed.iter().map(|p| (p.stamp, p.estimate)))?;
+        write_tum(&files[1], self.placed.iter().map(|p| (p.stamp, p.odometry)))?;
+        let odometry_path: Vec<Pose2> = self.placed.iter().map(|p| p.odometry).collect();
+        let estimate_path: Vec<Pose2> = self.placed.iter().map(|p| p.estimate).collect();
+        write_log_map_svg(
+            &files[2],
+            &[
+                Panel {
+                    title: "odometry".into(),
+                    points: &self.odometry_map,
+                    path: &odometry_path,
+                },
+                Panel {
+                    title: format!("scan matching ({})", self.matcher),
+                    points: &self.map,
+                    path: &estimate_path,
+                },
+            ],
+        )?;
+        let mut text = serde_json::to_string_pretty(summary)?;
+        text.push('\n');
+        std::fs::write(&files[3], text)?;
+        Ok(files.to_vec())
+    }
+}
+
+/// One input line of `twin match`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MatchRequest {
+    #[serde(rename = "ref")]
+    reference: RangeScan,
+    cur: RangeScan,
+    guess: [f64; 3],
+}
+
+/// One output line of `twin match`.
+#[derive(Serialize)]
+struct MatchReply {
+    x: f64,
+    y: f64,
+    theta: f64,
+    iterations: u32,
+    converged: bool,
+    correspondences: usize,
+    micros: f64,
+}
+
+/// Answers one `twin match` input line with one output line (without the newline): the match,
+/// or `{"error": "…"}` naming what is wrong.
+pub fn match_line(line: &str, matcher: &dyn ScanMatcher) -> String {
+    let request: MatchRequest = match serde_json::from_str(line) {
+        Ok(r) => r,
+        Err(e) => return error_line(&format!("not a scan pair: {e}")),
+    };
+    for (name, scan) in [("ref", &request.reference), ("cur", &request.cur)] {
+        if !(scan.angle_min.is_finite() && scan.angle_increment.is_finite()) {
+            return error_line(&format!(
+                "{name}: angle_min and angle_increment must be finite"
+            ));
+        }
+        if scan.range_max.is_nan() || scan.range_max <= 0.0 {
+            return error_line(&format!("{name}: range_max must be positive"));
+        }
+    }
+    if request.guess.iter().any(|v| !v.is_finite()) {
+        return error_line("guess: expected three finite numbers [x, y, theta]");
+    }
+    let guess = Pose2::new(request.guess[0], request.guess[1], request.guess[2]);
+    let clock = Instant::now();
+    let result = matcher.match_scans(&request.reference, &request.cur, guess);
+    let micros = clock.elapsed().as_secs_f64() * 1e6;
+    let reply = MatchReply {
+        x: result.pose.x,
+        y: result.pose.y,
+        theta: result.pose.theta,
+        iterations: result.iterations,
+        converged: result.converged,
+        correspondences: result.correspondences,
+        micros,
+    };
+    serde_json::to_string(&reply).unwrap_or_else(|e| error_line(&e.to_string()))
+}
+
+fn error_line(message: &str) -> String {
+    serde_json::json!({ "error": message }).to_string()
+}
