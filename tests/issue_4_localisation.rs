@@ -270,7 +270,7 @@ fn the_mit_csail_log_gives_a_sharper_map_than_odometry() {
     let replay = sim::replay::replay_log(&log, MatcherKind::Lorentz, Default::default(), |_, _| {});
     let summary = replay.summary("mit-csail.clf", &log);
     assert_eq!(summary.scans, 1988);
-    assert!(summary.trusted > 1900, "{summary:?}");
+    assert!(summary.stats.trusted > 1900, "{summary:?}");
     assert!(
         (summary.estimate_cells as f64) < 0.6 * summary.odometry_cells as f64,
         "{summary:?}"

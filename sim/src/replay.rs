@@ -4,7 +4,7 @@
 use crate::output::logmap::{Panel, occupied_cells, write_log_map_svg};
 use crate::output::write_tum;
 use robot::Pose2;
-use robot::localization::{MapBuilder, MapConfig, MatcherKind, RangeScan, ScanMatcher};
+use robot::localization::{MapBuilder, MapConfig, MatchStats, MatcherKind, RangeScan, ScanMatcher};
 use robot::logs::{LogEvent, RecordedLog};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -46,8 +46,9 @@ pub fn replay_log(
         match event {
             LogEvent::Odometry { stamp, pose } => builder.push_odometry(*stamp, *pose),
             LogEvent::Scan(scan) => {
-                scans.push(scan.points());
-                builder.push_scan(scan.clone());
+                let points = scan.points();
+                builder.push_points(scan.stamp, points.clone());
+                scans.push(points);
             }
             LogEvent::Points { stamp, points } => {
                 scans.push(points.clone());
@@ -99,12 +100,9 @@ pub struct ReplaySummary {
     pub matcher: String,
     /// Scans placed.
     pub scans: usize,
-    /// Matches trusted (enough correspondences).
-    pub trusted: usize,
-    /// Matches that converged before their cap.
-    pub converged: usize,
-    /// Mean correspondence searches per match.
-    pub mean_iterations: f64,
+    /// Matches made, trusted and converged, and the mean iterations.
+    #[serde(flatten)]
+    pub stats: MatchStats,
     /// Lines of the log skipped, by kind.
     pub skipped: std::collections::BTreeMap<String, usize>,
     /// Wall-clock seconds in the map builder (machine-dependent).
@@ -120,15 +118,11 @@ pub struct ReplaySummary {
 impl Replay {
     /// The summary of the replay of `log` from file `name`.
     pub fn summary(&self, name: &str, log: &RecordedLog) -> ReplaySummary {
-        let matches: Vec<_> = self.placed.iter().filter_map(|p| p.matched).collect();
         ReplaySummary {
             log: name.to_string(),
             matcher: self.matcher.to_string(),
             scans: self.placed.len(),
-            trusted: self.placed.iter().filter(|p| p.trusted).count(),
-            converged: matches.iter().filter(|m| m.converged).count(),
-            mean_iterations: matches.iter().map(|m| f64::from(m.iterations)).sum::<f64>()
-                / matches.len().max(1) as f64,
+            stats: MatchStats::of(&self.placed),
             skipped: log.skipped.clone(),
             wall_seconds: self.wall_seconds,
             ms_per_scan: self.wall_seconds * 1e3 / self.placed.len().max(1) as f64,

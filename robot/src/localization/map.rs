@@ -54,6 +54,33 @@ pub struct Placed {
     pub trusted: bool,
 }
 
+/// How the matches of a run went.
+#[derive(Copy, Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct MatchStats {
+    /// Matches made (every placed scan but the first).
+    pub matches: usize,
+    /// Matches trusted (enough correspondences).
+    pub trusted: usize,
+    /// Matches that converged before their iteration cap.
+    pub converged: usize,
+    /// Mean correspondence searches per match.
+    pub mean_iterations: f64,
+}
+
+impl MatchStats {
+    /// The statistics of `placed` scans.
+    pub fn of(placed: &[Placed]) -> Self {
+        let matches: Vec<_> = placed.iter().filter_map(|p| p.matched).collect();
+        MatchStats {
+            matches: matches.len(),
+            trusted: placed.iter().filter(|p| p.trusted).count(),
+            converged: matches.iter().filter(|m| m.converged).count(),
+            mean_iterations: matches.iter().map(|m| f64::from(m.iterations)).sum::<f64>()
+                / matches.len().max(1) as f64,
+        }
+    }
+}
+
 #[derive(Debug)]
 struct Key {
     reference: Reference,

@@ -27,7 +27,7 @@ mod scan;
 pub use icp::LeastSquares;
 pub use kdtree::KdTree;
 pub use lorentz::{Lorentz, THESIS_SIGMAS};
-pub use map::{MapBuilder, MapConfig, Placed};
+pub use map::{MapBuilder, MapConfig, MatchStats, Placed};
 pub use matcher::{Convergence, MatchResult, MatcherKind, Reference, ScanMatcher, UnknownMatcher};
 pub use mbicp::Mbicp;
 pub use scan::{RangeScan, ScanPoints};

@@ -148,7 +148,7 @@ fn map_command(
             summary.scans,
             summary.wall_seconds,
             summary.ms_per_scan,
-            summary.mean_iterations,
+            summary.stats.mean_iterations,
             log.skipped_lines()
         );
         println!(

@@ -1,6 +1,7 @@
 //! `summary.json`: the figures of a run.
 
 use crate::run::{LocalisationRecord, RunRecord};
+use robot::localization::MatchStats;
 use serde::Serialize;
 use std::path::Path;
 
@@ -56,14 +57,9 @@ pub struct LocalisationSummary {
     pub rms_error_deg: f64,
     /// The odometry's RMS position error over the same scans, metres, for comparison.
     pub odometry_rms_error_m: f64,
-    /// Matches made, and how many were trusted (enough correspondences).
-    pub matches: usize,
-    /// Matches trusted.
-    pub trusted: usize,
-    /// Matches that converged before their iteration cap.
-    pub converged: usize,
-    /// Mean correspondence searches per match.
-    pub mean_iterations: f64,
+    /// Matches made, trusted and converged, and the mean iterations.
+    #[serde(flatten)]
+    pub stats: MatchStats,
     /// Wall-clock milliseconds spent localising per scan (machine-dependent).
     pub wall_ms_per_scan: f64,
 }
@@ -96,7 +92,6 @@ impl LocalisationSummary {
             .sum::<f64>()
             / n)
             .sqrt();
-        let matches: Vec<_> = loc.placed.iter().filter_map(|p| p.matched).collect();
         LocalisationSummary {
             matcher: loc.matcher.to_string(),
             final_error_m,
@@ -104,11 +99,7 @@ impl LocalisationSummary {
             rms_error_m,
             rms_error_deg,
             odometry_rms_error_m,
-            matches: matches.len(),
-            trusted: loc.placed.iter().filter(|p| p.trusted).count(),
-            converged: matches.iter().filter(|m| m.converged).count(),
-            mean_iterations: matches.iter().map(|m| f64::from(m.iterations)).sum::<f64>()
-                / matches.len().max(1) as f64,
+            stats: MatchStats::of(&loc.placed),
             wall_ms_per_scan: loc.wall_seconds * 1e3 / n,
         }
     }
