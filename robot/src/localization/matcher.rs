@@ -46,6 +46,14 @@ impl Reference {
         let tree = KdTree::new(&points.xy);
         Reference { points, tree }
     }
+
+    /// Whether point `j` is the first or last point of the scan: the edge of what the reference
+    /// saw. A current point whose nearest reference point is an edge usually lies beyond it,
+    /// where the reference did not look — after a 0.5 m retreat down a corridor, half the
+    /// current scan.
+    pub fn is_edge(&self, j: usize) -> bool {
+        j == 0 || j + 1 == self.points.len()
+    }
 }
 
 /// A scan matcher: given a reference scan, a current scan and an initial guess, the rigid
