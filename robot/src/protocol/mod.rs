@@ -1,4 +1,5 @@
-//! Bytes on the wire: the line protocol of the base microcontroller (thesis App. A).
+//! Bytes on the wire: the line protocol of the two microcontrollers (thesis App. A) and the SICK
+//! LMS2xx telegrams ([`sick`]).
 //!
 //! A command is a letter, then non-negative decimal arguments (0..=65535) separated by one space,
 //! then `\n`, at 9600 bps 8N1. Each command answers with its letter and `\n` at once; `l`, `t`
@@ -8,7 +9,9 @@
 //! real serial backend agree byte for byte.
 
 pub mod base;
+pub mod line;
 pub mod pan_tilt;
+pub mod sick;
 
 /// Time to send `bytes` bytes over an asynchronous serial line at `baud` bits per second with one
 /// start bit, eight data bits and one stop bit (8N1: ten bits per byte).
