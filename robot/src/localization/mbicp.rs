@@ -94,9 +94,8 @@ impl Mbicp {
         j: usize,
         d2: f64,
     ) -> ([f64; 2], f64, bool) {
-        let Some(within) = self.interpolate_within_m else {
-            return (points[j], d2, j == 0 || j + 1 == points.len());
-        };
+        // Without interpolation every neighbour continues the scan: only its ends are edges.
+        let within = self.interpolate_within_m.unwrap_or(f64::INFINITY);
         let (mut best, mut segments, mut inside) = ((points[j], d2), 0, false);
         for n in [j.wrapping_sub(1), j + 1] {
             let Some(&other) = points.get(n) else {
@@ -105,6 +104,9 @@ impl Mbicp {
             let (dx, dy) = (other[0] - points[j][0], other[1] - points[j][1]);
             if dx * dx + dy * dy < within * within {
                 segments += 1;
+                if self.interpolate_within_m.is_none() {
+                    continue;
+                }
                 let (on, e2) = self.nearest_on_segment(p, points[j], other);
                 if e2 < best.1 {
                     (best, inside) = ((on, e2), true);

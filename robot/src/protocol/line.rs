@@ -196,11 +196,20 @@ impl<S: Read + Write> LineLink<S> {
         self.reader.read_line(&mut self.stream)
     }
 
+    /// Sends `request` and parses the one-line reply with `parse`.
+    pub fn query<T>(
+        &mut self,
+        request: &str,
+        parse: impl FnOnce(&str) -> Result<T, ReplyError>,
+    ) -> Result<T, LinkError> {
+        self.send(request)?;
+        let reply = self.read_line()?;
+        Ok(parse(&reply)?)
+    }
+
     /// Sends `line` and checks that the reply is `letter` alone.
     pub fn acknowledged(&mut self, line: &str, letter: char) -> Result<(), LinkError> {
-        self.send(line)?;
-        let reply = self.read_line()?;
-        Ok(base::parse_ack(&reply, letter)?)
+        self.query(line, |reply| base::parse_ack(reply, letter))
     }
 }
 
@@ -228,16 +237,15 @@ impl<S: Read + Write> BaseLink<S> {
 
     /// `l`: the wheel counters and flags, stamped `stamp`.
     pub fn status(&mut self, stamp: Stamp) -> Result<DriveStatus, LinkError> {
-        self.0.send(base::STATUS_REQUEST)?;
-        let line = self.0.read_line()?;
-        Ok(base::parse_status(&line, stamp)?)
+        self.0
+            .query(base::STATUS_REQUEST, |line| base::parse_status(line, stamp))
     }
 
     /// `t`: the battery voltages, stamped `stamp`.
     pub fn battery(&mut self, stamp: Stamp) -> Result<BatteryVoltages, LinkError> {
-        self.0.send(base::BATTERY_REQUEST)?;
-        let line = self.0.read_line()?;
-        Ok(base::parse_battery(&line, stamp)?)
+        self.0.query(base::BATTERY_REQUEST, |line| {
+            base::parse_battery(line, stamp)
+        })
     }
 
     /// A sonar command, acknowledged by its letter.
@@ -280,9 +288,9 @@ impl<S: Read + Write> PanTiltLink<S> {
 
     /// `l`: positions, clicks, switches and motor flags, stamped `stamp`.
     pub fn status(&mut self, stamp: Stamp) -> Result<PanTiltStatus, LinkError> {
-        self.0.send(pan_tilt::STATUS_REQUEST)?;
-        let line = self.0.read_line()?;
-        Ok(pan_tilt::parse_status(&line, stamp)?)
+        self.0.query(pan_tilt::STATUS_REQUEST, |line| {
+            pan_tilt::parse_status(line, stamp)
+        })
     }
 }
 
