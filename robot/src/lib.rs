@@ -12,6 +12,8 @@
 //! - [`control`]: what the robot does — scripted tours of firmware motions.
 //! - [`localization`]: scan matchers (least squares, Lorentzian NLM, line-assisted, MbICP) and
 //!   the map builder that chains them.
+//! - [`serial`]: [`SerialRobot`](serial::SerialRobot), the backend that drives the real robot (or
+//!   the twin's serial face) over serial ports or TCP.
 //! - [`logs`]: readers of recorded runs (CARMEN `.clf`, the `.script` and RobotLogger `.log`
 //!   formats of 002 App. C).
 //!
@@ -29,8 +31,9 @@ pub mod localization;
 pub mod logs;
 pub mod odometry;
 pub mod protocol;
+pub mod serial;
 pub mod time;
 
 pub use drive_geometry::DriveGeometry;
 pub use geometry::Pose2;
-pub use time::Stamp;
+pub use time::{Clock, Stamp};

@@ -91,6 +91,17 @@ impl fmt::Display for Stamp {
     }
 }
 
+/// Where a backend that talks to real devices gets the time: the caller passes one in.
+///
+/// Robot code never asks the operating system for the time; a serial backend needs a clock to
+/// stamp what arrives, so the program that opens it chooses one (a monotonic wall clock on the
+/// robot, a scaled one when the twin runs faster than real time, a manual one in tests). It is
+/// shared with the backend's reader threads, hence `Send + Sync`.
+pub trait Clock: Send + Sync {
+    /// The time now, on the robot's clock.
+    fn now(&self) -> Stamp;
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

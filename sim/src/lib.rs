@@ -11,6 +11,9 @@
 //!   models;
 //! - [`sim_robot`]: [`SimRobot`], the twin behind the robot crate's hardware contract, plus the
 //!   sim-only [`GroundTruth`];
+//! - [`serve`]: `twin serve`, the twin's three devices offered byte for byte on TCP ports or
+//!   pseudo-terminals, for the real backend (`SerialRobot`) and legacy tools;
+//! - [`drive`]: `twin drive`, a scenario's script through any backend (the real robot);
 //! - [`run`] and [`output`]: the `twin run` job and the files it writes;
 //! - [`pairs`]: scan pairs with known truth, for testing and measuring the matchers;
 //! - [`replay`]: localisation over recorded logs (`twin map`) and scan pairs (`twin match`).
@@ -20,12 +23,14 @@
 
 pub mod battery;
 pub mod config;
+pub mod drive;
 pub mod firmware;
 pub mod laser;
 pub mod motor;
 pub mod pairs;
 pub mod pan_tilt;
 pub mod rng;
+pub mod serve;
 pub mod sim_robot;
 pub mod twin;
 pub mod world_map;

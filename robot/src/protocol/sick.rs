@@ -53,6 +53,24 @@ pub const MODE_REPLY: u8 = 0xA0;
 pub const MEASURED_VALUES: u8 = 0xB0;
 /// Reply to [`SET_VARIANT`].
 pub const VARIANT_REPLY: u8 = 0xBB;
+/// Request: the configuration (reply [`CONFIG_REPLY`]).
+pub const REQUEST_CONFIG: u8 = 0x74;
+/// Reply to [`REQUEST_CONFIG`]: the [`CONFIG_LENGTH`] configuration bytes.
+pub const CONFIG_REPLY: u8 = 0xF4;
+/// Request: write the configuration, in installation mode (reply [`SET_CONFIG_REPLY`]).
+pub const SET_CONFIG: u8 = 0x77;
+/// Reply to [`SET_CONFIG`]: `01` (done) or `00` (refused), then the configuration now in force.
+pub const SET_CONFIG_REPLY: u8 = 0xF7;
+/// Bytes of the configuration block (blocks A to A4 of the listing).
+pub const CONFIG_LENGTH: usize = 34;
+/// Measuring mode: 32 m range, field A in bit 15 (the mode App. B's `0x7f` mask reads).
+pub const MEASURING_MODE_32M_FIELD_A: u8 = 0x06;
+/// Measuring mode: 32 m range, reflector bit in bit 15.
+pub const MEASURING_MODE_32M_REFLECTOR: u8 = 0x05;
+/// Measured value unit: centimetres (the default).
+pub const UNITS_CM: u8 = 0x00;
+/// Measured value unit: millimetres (the thesis's configuration).
+pub const UNITS_MM: u8 = 0x01;
 
 /// Operating mode: monitoring, measured values sent on request (the thesis's driver polls).
 pub const MODE_REQUEST_VALUES: u8 = 0x25;
@@ -238,6 +256,95 @@ impl Telegram {
         let mut data = angle_deg.to_le_bytes().to_vec();
         data.extend(resolution_centideg.to_le_bytes());
         Telegram::request(SET_VARIANT, data)
+    }
+}
+
+/// The LMS's configuration block as `74` reads it and `77` writes it: blanking (block A), stop and
+/// peak thresholds (B), availability (C), measuring mode (D), unit (E), then the field and
+/// restart settings (F to A4), which this crate keeps as read.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub struct LmsConfig(pub [u8; CONFIG_LENGTH]);
+
+/// A configuration reply that does not read.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ConfigError {
+    /// Another telegram.
+    #[error("expected a configuration reply (0x{expected:02X}), got command 0x{got:02X}")]
+    NotConfig {
+        /// The reply expected.
+        expected: u8,
+        /// The command received.
+        got: u8,
+    },
+    /// Too few bytes.
+    #[error("configuration reply with {0} data bytes, expected at least {CONFIG_LENGTH}")]
+    Short(usize),
+    /// The LMS refused the new configuration.
+    #[error("the LMS refused the configuration (is it in installation mode?)")]
+    Refused,
+}
+
+impl LmsConfig {
+    /// The measuring mode (block D).
+    pub fn measuring_mode(&self) -> u8 {
+        self.0[5]
+    }
+
+    /// The measured value unit (block E).
+    pub fn units(&self) -> u8 {
+        self.0[6]
+    }
+
+    /// Whether the LMS reports millimetres over 32 m, as the thesis configured it.
+    pub fn is_mm_32m(&self) -> bool {
+        self.units() == UNITS_MM
+            && matches!(
+                self.measuring_mode(),
+                MEASURING_MODE_32M_FIELD_A | MEASURING_MODE_32M_REFLECTOR
+            )
+    }
+
+    /// The same configuration in millimetres over 32 m (field A mode).
+    pub fn with_mm_32m(mut self) -> Self {
+        self.0[5] = MEASURING_MODE_32M_FIELD_A;
+        self.0[6] = UNITS_MM;
+        self
+    }
+
+    /// Reads a `F4` reply (to `74`) or a `F7` reply (to `77`, refused unless its first byte is 1).
+    pub fn from_reply(telegram: &Telegram) -> Result<Self, ConfigError> {
+        let data = match telegram.command {
+            CONFIG_REPLY => &telegram.data[..],
+            SET_CONFIG_REPLY => match telegram.data.split_first() {
+                Some((1, rest)) => rest,
+                Some(_) => return Err(ConfigError::Refused),
+                None => return Err(ConfigError::Short(0)),
+            },
+            got => {
+                return Err(ConfigError::NotConfig {
+                    expected: CONFIG_REPLY,
+                    got,
+                });
+            }
+        };
+        let block = data
+            .get(..CONFIG_LENGTH)
+            .ok_or(ConfigError::Short(data.len()))?;
+        let mut bytes = [0; CONFIG_LENGTH];
+        bytes.copy_from_slice(block);
+        Ok(LmsConfig(bytes))
+    }
+}
+
+impl Telegram {
+    /// Requests: the configuration (`74`).
+    pub fn request_config() -> Self {
+        Telegram::request(REQUEST_CONFIG, Vec::new())
+    }
+
+    /// Requests: write `config` (`77`, installation mode only).
+    pub fn set_config(config: &LmsConfig) -> Self {
+        Telegram::request(SET_CONFIG, config.0.to_vec())
     }
 }
 
@@ -469,7 +576,7 @@ mod tests {
 
     /// Golden telegrams, their CRCs computed independently of this code (a Python transcription
     /// of the listing's C routine) and matching those quoted by open LMS2xx drivers.
-    const GOLDEN: [(&str, &[u8]); 4] = [
+    const GOLDEN: [(&str, &[u8]); 6] = [
         (
             "one scan",
             &[0x02, 0x00, 0x02, 0x00, 0x30, 0x01, 0x31, 0x18],
@@ -485,6 +592,18 @@ mod tests {
                 0x02, 0x00, 0x05, 0x00, 0x3B, 0xB4, 0x00, 0x32, 0x00, 0x3B, 0x1F,
             ],
         ),
+        (
+            "read configuration",
+            &[0x02, 0x00, 0x01, 0x00, 0x74, 0x50, 0x12],
+        ),
+        (
+            "mm, 32 m (other blocks zero)",
+            &[
+                0x02, 0x00, 0x23, 0x00, 0x77, 0x00, 0x00, 0x00, 0x00, 0x00, 0x06, 0x01, 0x00, 0x00,
+                0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00,
+                0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0xAB, 0x70,
+            ],
+        ),
     ];
 
     #[test]
@@ -494,12 +613,42 @@ mod tests {
             Telegram::set_mode(MODE_STREAM_VALUES),
             Telegram::set_mode(MODE_REQUEST_VALUES),
             Telegram::set_variant(180, 50),
+            Telegram::request_config(),
+            Telegram::set_config(&LmsConfig([0; CONFIG_LENGTH]).with_mm_32m()),
         ];
         for ((name, golden), telegram) in GOLDEN.iter().zip(built) {
             assert_eq!(telegram.encode().unwrap(), *golden, "{name}");
             let (back, used) = Telegram::decode(golden).unwrap();
             assert_eq!((back, used), (telegram, golden.len()), "{name}");
         }
+    }
+
+    #[test]
+    fn configuration_replies_read_and_refusals_are_errors() {
+        let mut block = vec![0u8; CONFIG_LENGTH];
+        block[5] = MEASURING_MODE_32M_FIELD_A;
+        block[6] = UNITS_MM;
+        let read = LmsConfig::from_reply(&Telegram::reply(CONFIG_REPLY, block.clone(), 0));
+        assert!(read.unwrap().is_mm_32m());
+        let mut done = vec![1];
+        done.extend(&block);
+        assert!(
+            LmsConfig::from_reply(&Telegram::reply(SET_CONFIG_REPLY, done.clone(), 0))
+                .unwrap()
+                .is_mm_32m()
+        );
+        done[0] = 0;
+        assert_eq!(
+            LmsConfig::from_reply(&Telegram::reply(SET_CONFIG_REPLY, done, 0)),
+            Err(ConfigError::Refused)
+        );
+        assert_eq!(
+            LmsConfig::from_reply(&Telegram::reply(CONFIG_REPLY, block[..9].to_vec(), 0)),
+            Err(ConfigError::Short(9))
+        );
+        let centimetres = LmsConfig([0; CONFIG_LENGTH]);
+        assert!(!centimetres.is_mm_32m());
+        assert!(centimetres.with_mm_32m().is_mm_32m());
     }
 
     #[test]

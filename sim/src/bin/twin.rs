@@ -4,6 +4,8 @@
 //! twin run scenarios/lab-tour.toml [--out DIR] [--seed N]
 //! twin map tests/data/mit-csail.clf [--matcher NAME] [--out DIR]
 //! twin match --matcher lorentz < pairs.jsonl > results.jsonl
+//! twin serve scenarios/lab-tour.toml --base tcp:127.0.0.1:4001 --laser tcp:127.0.0.1:4003
+//! twin drive scenarios/lab-tour.toml --base /dev/ttyUSB0 --laser /dev/ttyUSB2 [--out DIR]
 //! ```
 
 use anyhow::{Context, Result};
@@ -63,6 +65,64 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
+    /// Run the twin in (scaled) real time and offer its devices byte for byte, as the robot's
+    /// serial ports would: the base and pan-tilt firmware and the SICK LMS's telegrams, on TCP
+    /// ports or pseudo-terminals. Runs until killed (or for --duration).
+    Serve {
+        /// The scenario file: its world, robot, noise and seed (its script is not run).
+        scenario: PathBuf,
+        /// Where to offer the base microcontroller: tcp:HOST:PORT (port 0: any free) or pty.
+        #[arg(long)]
+        base: sim::serve::Offer,
+        /// Where to offer the pan-tilt microcontroller (robots with a pan-tilt).
+        #[arg(long = "pantilt")]
+        pan_tilt: Option<sim::serve::Offer>,
+        /// Where to offer the laser.
+        #[arg(long)]
+        laser: Option<sim::serve::Offer>,
+        /// Simulated seconds per wall-clock second.
+        #[arg(long, default_value_t = 1.0)]
+        speed: f64,
+        /// Stop after this many simulated seconds.
+        #[arg(long)]
+        duration: Option<f64>,
+        /// Seed replacing the scenario's.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Print only the addresses and errors.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Drive a scenario's script on the real robot (or on `twin serve`) through the serial
+    /// backend, with the same controller and localisation as `twin run`; write the odometry and
+    /// estimate trajectories, the scans, a map picture and a summary.
+    Drive {
+        /// The scenario file: its script, robot description, pacing and matcher (its world is
+        /// only used for the start pose).
+        script: PathBuf,
+        /// The base microcontroller: a serial device (/dev/ttyUSB0) or tcp:HOST:PORT.
+        #[arg(long)]
+        base: robot::serial::Endpoint,
+        /// The pan-tilt microcontroller, if the scenario positions the head.
+        #[arg(long = "pantilt")]
+        pan_tilt: Option<robot::serial::Endpoint>,
+        /// The laser.
+        #[arg(long)]
+        laser: robot::serial::Endpoint,
+        /// The matcher: ls, lorentz, lorentz-lines or mbicp [default: the scenario's, if any].
+        #[arg(long)]
+        matcher: Option<MatcherKind>,
+        /// Output folder [default: out/drive-SCENARIO-NAME].
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// How much faster than real time the devices run (the --speed of `twin serve`; 1 on the
+        /// real robot).
+        #[arg(long, default_value_t = 1.0)]
+        time_scale: f64,
+        /// Print nothing but errors.
+        #[arg(long, short)]
+        quiet: bool,
+    },
     /// Match scan pairs read as JSON Lines from stdin, one result line per pair on stdout.
     ///
     /// Input: {"ref": {"angle_min", "angle_increment", "range_max", "ranges": [...]}, "cur": {...},
@@ -101,7 +161,188 @@ fn run(cli: Cli) -> Result<()> {
             quiet,
         } => map_command(log, matcher, out, keyframe_m, quiet),
         Command::Match { matcher } => match_command(matcher),
+        Command::Serve {
+            scenario,
+            base,
+            pan_tilt,
+            laser,
+            speed,
+            duration,
+            seed,
+            quiet,
+        } => serve_command(
+            scenario,
+            sim::serve::ServeOptions {
+                speed,
+                base,
+                pan_tilt,
+                laser,
+            },
+            duration,
+            seed,
+            quiet,
+        ),
+        Command::Drive {
+            script,
+            base,
+            pan_tilt,
+            laser,
+            matcher,
+            out,
+            time_scale,
+            quiet,
+        } => drive_command(
+            script, base, pan_tilt, laser, matcher, out, time_scale, quiet,
+        ),
     }
+}
+
+fn serve_command(
+    path: PathBuf,
+    options: sim::serve::ServeOptions,
+    duration: Option<f64>,
+    seed: Option<u64>,
+    quiet: bool,
+) -> Result<()> {
+    if !(options.speed > 0.0 && options.speed <= 1000.0) {
+        anyhow::bail!(
+            "--speed must be above 0 and at most 1000, found {}",
+            options.speed
+        );
+    }
+    let duration = match duration {
+        Some(d) if d > 0.0 && d.is_finite() => Some(std::time::Duration::from_secs_f64(d)),
+        Some(d) => anyhow::bail!("--duration must be a positive number of seconds, found {d}"),
+        None => None,
+    };
+    let scenario = Scenario::load(&path)?;
+    let twin = sim::Twin::new(
+        &scenario.world,
+        &scenario.robot,
+        &scenario.noise,
+        seed.unwrap_or(scenario.seed),
+    )?;
+    let mut server = sim::serve::Server::new(twin, &options)?;
+    println!(
+        "serving {} ({}) at {}x real time",
+        scenario.name, scenario.robot.name, options.speed
+    );
+    for (device, address) in server.addresses() {
+        println!("{device:<9} {address}");
+    }
+    use std::io::Write as _;
+    std::io::stdout().flush()?;
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    server.run(&stop, duration, |t, line| {
+        if !quiet {
+            eprintln!("[{t}] {line}");
+        }
+    });
+    if !quiet {
+        for (device, stats) in server.stats() {
+            println!(
+                "{device}: {} connection(s), {} bytes in ({} dropped), {} messages, {} bytes out ({} lost)",
+                stats.connections,
+                stats.bytes_in,
+                stats.bytes_dropped_in,
+                stats.messages_in,
+                stats.bytes_out,
+                stats.bytes_dropped_out
+            );
+        }
+    }
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn drive_command(
+    path: PathBuf,
+    base: robot::serial::Endpoint,
+    pan_tilt: Option<robot::serial::Endpoint>,
+    laser: robot::serial::Endpoint,
+    matcher: Option<MatcherKind>,
+    out: Option<PathBuf>,
+    time_scale: f64,
+    quiet: bool,
+) -> Result<()> {
+    use robot::serial::{SerialConfig, SerialRobot};
+    if !(time_scale > 0.0 && time_scale <= 1000.0) {
+        anyhow::bail!("--time-scale must be above 0 and at most 1000, found {time_scale}");
+    }
+    let scenario = Scenario::load(&path)?;
+    let mut config = SerialConfig::new(base);
+    config.pan_tilt = pan_tilt;
+    config.laser = Some(laser);
+    config.base_baud = scenario.robot.drive.serial_baud;
+    if let Some(pt) = &scenario.robot.pan_tilt {
+        config.pan_tilt_baud = pt.serial_baud;
+    }
+    config.laser_baud = scenario.robot.laser.baud;
+    config.laser_sweep = std::time::Duration::from_secs_f64(scenario.robot.laser.sweep_s.get());
+    config.laser_range_max_mm = (scenario.robot.laser.range_max_m.get() * 1000.0).round() as u16;
+    let clock: std::sync::Arc<dyn robot::Clock> =
+        std::sync::Arc::new(sim::serve::WallClock::new(time_scale));
+    let mut robot = SerialRobot::open(config, clock).context("opening the robot's devices")?;
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(scenario.steps.len() as u64).with_style(
+            ProgressStyle::with_template(
+                "{prefix} [{bar:30}] step {pos}/{len} {elapsed_precise} ETA {eta}",
+            )
+            .expect("valid template")
+            .progress_chars("=> "),
+        )
+    };
+    bar.set_prefix(format!("drive {}", scenario.name));
+    let result = sim::drive::drive_scenario(&mut robot, &scenario, matcher, |done, _| {
+        bar.set_position(done as u64)
+    });
+    bar.finish_and_clear();
+    let events: Vec<String> = robot
+        .take_events()
+        .iter()
+        .map(ToString::to_string)
+        .collect();
+    if !quiet {
+        for e in &events {
+            eprintln!("{e}");
+        }
+    }
+    let record = result?;
+    let dir = out.unwrap_or_else(|| PathBuf::from("out").join(format!("drive-{}", scenario.name)));
+    let files = sim::drive::write_drive(&record, &scenario, events.clone(), &dir)
+        .with_context(|| format!("writing the outputs into {}", dir.display()))?;
+    if !quiet {
+        let p = record.final_odometry;
+        println!(
+            "{}: {} steps, {} scans in {:.1} s; final odometry ({:.3} m, {:.3} m, {:.2} deg); {} link event(s)",
+            record.scenario,
+            record.steps,
+            record.scans.len(),
+            record.wall_seconds,
+            p.x,
+            p.y,
+            p.theta.to_degrees(),
+            events.len()
+        );
+        if let Some((kind, placed, _)) = &record.localisation
+            && let Some(last) = placed.last()
+        {
+            let e = last.estimate;
+            println!(
+                "estimate ({kind}): ({:.3} m, {:.3} m, {:.2} deg)",
+                e.x,
+                e.y,
+                e.theta.to_degrees()
+            );
+        }
+        println!("wrote {}", dir.display());
+        for f in &files {
+            println!("  {}", f.display());
+        }
+    }
+    Ok(())
 }
 
 fn map_command(

@@ -139,6 +139,8 @@ pub struct LaserModel {
     sigma_m: f64,
     outliers: Outliers,
     timing: LaserTiming,
+    /// Rate of its serial line, bits per second.
+    baud: u32,
     /// Sine and cosine of each beam's angle.
     beam_trig: Vec<(f64, f64)>,
 }
@@ -168,6 +170,7 @@ impl LaserModel {
                 desc.telegram_bytes,
                 desc.baud,
             ),
+            baud: desc.baud,
             beam_trig: angles.iter().map(|a| a.sin_cos()).collect(),
         }
     }
@@ -180,6 +183,11 @@ impl LaserModel {
     /// Sweep and transfer times.
     pub fn timing(&self) -> LaserTiming {
         self.timing
+    }
+
+    /// Rate of the laser's serial line, bits per second.
+    pub fn baud(&self) -> u32 {
+        self.baud
     }
 
     /// The maximum range, metres.

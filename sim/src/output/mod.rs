@@ -14,7 +14,7 @@ mod svg;
 mod tilted;
 mod tum;
 
-pub use scans::{ScanLine, write_scans};
+pub use scans::{ScanLine, write_scan_lines, write_scans};
 pub use sonar::write_sonar;
 pub use summary::{LocalisationSummary, Summary, estimate_errors};
 pub use svg::write_map_svg;

@@ -1,6 +1,8 @@
 //! Scans as JSON Lines, one object per scan, in the shape later tools read.
 
 use crate::run::ScanRecord;
+use robot::Pose2;
+use robot::hardware::LaserScan;
 use serde::Serialize;
 use std::io::{BufWriter, Write};
 use std::path::Path;
@@ -37,8 +39,19 @@ pub struct ScanLine {
 impl ScanLine {
     /// The line for a recorded scan.
     pub fn of(record: &ScanRecord) -> Self {
-        let s = &record.scan;
         let mount = record.frame.mount_on(record.truth);
+        Self::new(
+            &record.scan,
+            record.odometry,
+            mount,
+            record.frame.origin[2],
+            record.frame.tilt,
+        )
+    }
+
+    /// The line for `s`, taken at `odometry` by a laser at `mount` on the base, `z` above the
+    /// floor, its scan plane tilted by `tilt`.
+    pub fn new(s: &LaserScan, odometry: Pose2, mount: Pose2, z: f64, tilt: f64) -> Self {
         ScanLine {
             t: s.stamp.secs_f64(),
             angle_min: s.angle_min,
@@ -49,19 +62,24 @@ impl ScanLine {
                 .iter()
                 .map(|&mm| f64::from(mm) / 1000.0)
                 .collect(),
-            odometry: [record.odometry.x, record.odometry.y, record.odometry.theta],
+            odometry: [odometry.x, odometry.y, odometry.theta],
             laser_mount: [mount.x, mount.y, mount.theta],
-            laser_z: record.frame.origin[2],
-            laser_tilt: record.frame.tilt,
+            laser_z: z,
+            laser_tilt: tilt,
         }
     }
 }
 
 /// Writes one JSON object per scan.
 pub fn write_scans(path: &Path, records: &[ScanRecord]) -> std::io::Result<()> {
+    write_scan_lines(path, records.iter().map(ScanLine::of))
+}
+
+/// Writes one JSON object per line.
+pub fn write_scan_lines(path: &Path, lines: impl Iterator<Item = ScanLine>) -> std::io::Result<()> {
     let mut out = BufWriter::new(std::fs::File::create(path)?);
-    for r in records {
-        serde_json::to_writer(&mut out, &ScanLine::of(r))?;
+    for line in lines {
+        serde_json::to_writer(&mut out, &line)?;
         out.write_all(b"\n")?;
     }
     out.flush()

@@ -299,6 +299,15 @@ impl Twin {
         Some((pending.delivery, scan))
     }
 
+    /// Drops the next scan on its way without measuring it (nobody asked for it); returns its
+    /// delivery time.
+    pub fn drop_next_scan(&mut self) -> Option<Stamp> {
+        self.component_mut::<Lidar>()
+            .outbox
+            .pop_front()
+            .map(|p| p.delivery)
+    }
+
     /// Drops, unmeasured, the scans on their way that were measured before `t`; returns the
     /// delivery time of the last one dropped.
     pub fn skip_scans_before(&mut self, t: Stamp) -> Option<Stamp> {

@@ -1,0 +1,254 @@
+//! `twin drive`: a scenario's script driven through any backend of the hardware contract — the
+//! real robot's `SerialRobot` above all — with the same controller and localisation as `twin run`,
+//! writing the same kind of outputs. There is no ground truth out there, so the picture compares
+//! the map placed by odometry with the map placed by scan matching (as `twin map` does).
+
+use crate::config::Scenario;
+use crate::output::logmap::{Panel, occupied_cells, write_log_map_svg};
+use crate::output::{ScanLine, write_scan_lines, write_tum};
+use robot::control::{TourError, TourEvent, run_tour};
+use robot::hardware::{DriveBase, HardwareError, Laser, LaserScan, PanTilt, PanTiltStatus};
+use robot::localization::{MapBuilder, MapConfig, MatchStats, MatcherKind, Placed, RangeScan};
+use robot::{Pose2, Stamp};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Everything a drive produced.
+#[derive(Clone, Debug)]
+pub struct DriveRecord {
+    /// The scenario's name.
+    pub scenario: String,
+    /// Steps carried out.
+    pub steps: usize,
+    /// Kept scans with the odometry at their stamp (world frame: it starts at the start pose).
+    pub scans: Vec<(LaserScan, Pose2)>,
+    /// The odometry at the end.
+    pub final_odometry: Pose2,
+    /// The pan-tilt's status once at the scenario's position, if it has one.
+    pub pan_tilt: Option<PanTiltStatus>,
+    /// The matcher and what it placed, when localising.
+    pub localisation: Option<(MatcherKind, Vec<Placed>, Vec<[f64; 2]>)>,
+    /// Robot-clock stamp of the last scan.
+    pub end: Stamp,
+    /// Wall-clock seconds the drive took.
+    pub wall_seconds: f64,
+}
+
+/// Why a drive stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum DriveError<E: HardwareError> {
+    /// The tour failed.
+    #[error(transparent)]
+    Tour(#[from] TourError<E>),
+    /// The pan-tilt could not reach the scenario's position.
+    #[error("pan-tilt: {0}")]
+    PanTilt(E),
+    /// The head was still moving after the polls allowed.
+    #[error("pan-tilt: the head was still moving after {0} polls")]
+    HeadStuck(u32),
+}
+
+/// Ticks between two status polls while the head moves, and how many polls a move may take.
+const HEAD_POLL_MS: u16 = 50;
+const HEAD_POLL_LIMIT: u32 = 1200;
+
+/// Drives `scenario`'s script on `robot` (positioning the pan-tilt first if the scenario says
+/// where), localising with `matcher` (default: the scenario's). `progress(done, total)` is called
+/// before each step.
+pub fn drive_scenario<R>(
+    robot: &mut R,
+    scenario: &Scenario,
+    matcher: Option<MatcherKind>,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<DriveRecord, DriveError<R::Error>>
+where
+    R: DriveBase + Laser + PanTilt,
+{
+    let started = Instant::now();
+    let pan_tilt = match scenario.pan_tilt {
+        Some(target) => {
+            let status = robot
+                .move_pan_tilt_to(target, HEAD_POLL_MS, HEAD_POLL_LIMIT)
+                .map_err(DriveError::PanTilt)?;
+            if !status.idle() {
+                return Err(DriveError::HeadStuck(HEAD_POLL_LIMIT));
+            }
+            Some(status)
+        }
+        None => None,
+    };
+    let matcher = matcher.or(scenario.localisation.map(|l| l.matcher));
+    let mut mapper = matcher.map(|kind| {
+        let settings = scenario.localisation;
+        let config = MapConfig {
+            mount: scenario.robot.laser_mount(),
+            keyframe_distance_m: settings.map_or(0.0, |s| s.keyframe_distance_m),
+            keyframe_angle_rad: settings.map_or(0.0, |s| s.keyframe_angle_rad),
+            ..MapConfig::default()
+        };
+        (kind, MapBuilder::in_odometry_frame(kind.build(), config))
+    });
+    let mut scans = Vec::new();
+    let report = run_tour(
+        robot,
+        scenario.robot.geometry(),
+        scenario.world.start,
+        &scenario.steps,
+        &scenario.tour,
+        |event: TourEvent<'_>| match event {
+            TourEvent::StepStarted { index, total, .. } => progress(index, total),
+            TourEvent::Scan { scan, odometry } => {
+                if let Some((_, mapper)) = &mut mapper {
+                    mapper.push_odometry(scan.stamp, odometry);
+                    mapper.push_scan(RangeScan::from(scan));
+                }
+                scans.push((scan.clone(), odometry));
+            }
+        },
+    )?;
+    progress(report.steps, report.steps);
+    let localisation = mapper.map(|(kind, mut mapper)| {
+        mapper.finish();
+        (kind, mapper.placed().to_vec(), mapper.map_points().to_vec())
+    });
+    Ok(DriveRecord {
+        scenario: scenario.name.clone(),
+        steps: report.steps,
+        end: scans
+            .last()
+            .map_or(report.end, |(s, _): &(LaserScan, Pose2)| s.stamp),
+        scans,
+        final_odometry: report.final_odometry,
+        pan_tilt,
+        localisation,
+        wall_seconds: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// The figures of a drive, as `summary.json` holds them.
+#[derive(Clone, Debug, Serialize)]
+pub struct DriveSummary {
+    /// Scenario name.
+    pub scenario: String,
+    /// Robot name.
+    pub robot: String,
+    /// Script steps carried out.
+    pub steps: usize,
+    /// Scans written.
+    pub scans: usize,
+    /// Robot-clock seconds at the last scan.
+    pub robot_seconds: f64,
+    /// Wall-clock seconds.
+    pub wall_seconds: f64,
+    /// Final odometry `[x, y, theta]`.
+    pub final_odometry: [f64; 3],
+    /// The matcher, if the drive localised.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub matcher: Option<String>,
+    /// Final estimate `[x, y, theta]`, if the drive localised.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub final_estimate: Option<[f64; 3]>,
+    /// Matches made, trusted and converged.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub matches: Option<MatchStats>,
+    /// 5 cm cells occupied by the map placed by odometry.
+    pub odometry_cells: usize,
+    /// 5 cm cells occupied by the map placed by the estimate (fewer: sharper).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub estimate_cells: Option<usize>,
+    /// What happened on the links (reconnections, skipped garbage), one line each.
+    pub link_events: Vec<String>,
+}
+
+/// Writes `odometry.tum`, `estimate.tum` (when localising), `scans.jsonl`, `map.svg` and
+/// `summary.json` into `dir`; `link_events` go into the summary.
+pub fn write_drive(
+    record: &DriveRecord,
+    scenario: &Scenario,
+    link_events: Vec<String>,
+    dir: &Path,
+) -> std::io::Result<Vec<PathBuf>> {
+    std::fs::create_dir_all(dir)?;
+    let mut files = Vec::new();
+    let mut file = |name: &str| {
+        let path = dir.join(name);
+        files.push(path.clone());
+        path
+    };
+    write_tum(
+        &file("odometry.tum"),
+        record.scans.iter().map(|(s, p)| (s.stamp, *p)),
+    )?;
+    if let Some((_, placed, _)) = &record.localisation {
+        write_tum(
+            &file("estimate.tum"),
+            placed.iter().map(|p| (p.stamp, p.estimate)),
+        )?;
+    }
+    let mount = scenario.robot.laser_mount();
+    let z = scenario.robot.laser.z_m.get();
+    write_scan_lines(
+        &file("scans.jsonl"),
+        record
+            .scans
+            .iter()
+            .map(|(s, p)| ScanLine::new(s, *p, mount, z, 0.0)),
+    )?;
+    let mut odometry_map = Vec::new();
+    for (scan, pose) in &record.scans {
+        let laser = pose.compose(&mount);
+        odometry_map.extend(RangeScan::from(scan).points().xy.iter().map(|q| {
+            let (x, y) = laser.transform_point(q[0], q[1]);
+            [x, y]
+        }));
+    }
+    let odometry_path: Vec<Pose2> = record.scans.iter().map(|(_, p)| *p).collect();
+    let mut panels = vec![Panel {
+        title: "odometry".into(),
+        points: &odometry_map,
+        path: &odometry_path,
+    }];
+    let estimate_path: Vec<Pose2> = record
+        .localisation
+        .as_ref()
+        .map(|(_, placed, _)| placed.iter().map(|p| p.estimate).collect())
+        .unwrap_or_default();
+    if let Some((kind, _, map)) = &record.localisation {
+        panels.push(Panel {
+            title: format!("scan matching ({kind})"),
+            points: map,
+            path: &estimate_path,
+        });
+    }
+    write_log_map_svg(&file("map.svg"), &panels)?;
+    let pose = |p: &Pose2| [p.x, p.y, p.theta];
+    let summary = DriveSummary {
+        scenario: record.scenario.clone(),
+        robot: scenario.robot.name.clone(),
+        steps: record.steps,
+        scans: record.scans.len(),
+        robot_seconds: record.end.secs_f64(),
+        wall_seconds: record.wall_seconds,
+        final_odometry: pose(&record.final_odometry),
+        matcher: record.localisation.as_ref().map(|(k, _, _)| k.to_string()),
+        final_estimate: record
+            .localisation
+            .as_ref()
+            .and_then(|(_, placed, _)| placed.last().map(|p| pose(&p.estimate))),
+        matches: record
+            .localisation
+            .as_ref()
+            .map(|(_, placed, _)| MatchStats::of(placed)),
+        odometry_cells: occupied_cells(&odometry_map).len(),
+        estimate_cells: record
+            .localisation
+            .as_ref()
+            .map(|(_, _, map)| occupied_cells(map).len()),
+        link_events,
+    };
+    let mut text = serde_json::to_string_pretty(&summary)?;
+    text.push('\n');
+    std::fs::write(file("summary.json"), text)?;
+    Ok(files)
+}
