@@ -326,4 +326,19 @@ fn the_pan_tilt_homes_and_moves_through_the_serial_face_as_on_the_twin() {
     );
     assert_eq!((serial.pan, serial.tilt), (0, 10));
     assert_eq!(drive.scans.len(), direct.scans.len());
+    // scans.jsonl places the laser where the head was put, as `twin run` does from the truth.
+    let dir = std::env::temp_dir().join(format!("twin-drive-head-{}", std::process::id()));
+    sim::drive::write_drive(&drive, &scenario, Vec::new(), &dir).unwrap();
+    let text = std::fs::read_to_string(dir.join("scans.jsonl")).unwrap();
+    let first: sim::output::ScanLine = serde_json::from_str(text.lines().next().unwrap()).unwrap();
+    let expected = sim::output::ScanLine::of(&direct.scans[0]);
+    assert!(
+        (first.laser_tilt - expected.laser_tilt).abs() < 0.01,
+        "{first:?}"
+    );
+    assert!((first.laser_z - expected.laser_z).abs() < 0.005);
+    assert!(
+        (first.laser_tilt.to_degrees() + 13.65).abs() < 0.5,
+        "tilted 13.65° down"
+    );
 }

@@ -186,14 +186,30 @@ pub fn write_drive(
             placed.iter().map(|p| (p.stamp, p.estimate)),
         )?;
     }
-    let mount = scenario.robot.laser_mount();
-    let z = scenario.robot.laser.z_m.get();
+    // Where the laser sat on the base: on its fixed mount, or where the head was put.
+    let head = scenario
+        .robot
+        .pan_tilt
+        .as_ref()
+        .zip(record.pan_tilt)
+        .map(|(desc, status)| {
+            let head = crate::pan_tilt::PanTiltHead::new(desc);
+            head.laser_frame(Pose2::IDENTITY, head.angles_at(status.pan, status.tilt))
+        });
+    let (mount, z, tilt) = match head {
+        Some(frame) => (frame.mount_on(Pose2::IDENTITY), frame.origin[2], frame.tilt),
+        None => (
+            scenario.robot.laser_mount(),
+            scenario.robot.laser.z_m.get(),
+            0.0,
+        ),
+    };
     write_scan_lines(
         &file("scans.jsonl"),
         record
             .scans
             .iter()
-            .map(|(s, p)| ScanLine::new(s, *p, mount, z, 0.0)),
+            .map(|(s, p)| ScanLine::new(s, *p, mount, z, tilt)),
     )?;
     let mut odometry_map = Vec::new();
     for (scan, pose) in &record.scans {

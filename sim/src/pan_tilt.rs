@@ -204,6 +204,15 @@ impl PanTiltHead {
         }
     }
 
+    /// The joints' angles when the firmware reports the head at positions `pan` and `tilt`
+    /// (whole motor turns from position 0, as `l` counts them).
+    pub fn angles_at(&self, pan: i16, tilt: i16) -> HeadAngles {
+        HeadAngles {
+            pan: f64::from(pan) * self.pan.rad_per_turn,
+            tilt: (f64::from(tilt) - self.level_position) * self.tilt.rad_per_turn,
+        }
+    }
+
     /// The joints in motor turns from position 0: (pan, tilt).
     pub fn turns(&self) -> (f64, f64) {
         (self.pan.turns, self.tilt.turns)
