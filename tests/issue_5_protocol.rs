@@ -5,10 +5,10 @@
 
 use proptest::prelude::*;
 use robot::Stamp;
-use robot::hardware::{DriveCommand, DriveWait, Ramp, SonarCommand};
-use robot::protocol::line::{BaseLink, LineReader, LinkError, MAX_LINE};
+use robot::hardware::{DriveCommand, DriveWait, PanTiltCommand, Ramp, SonarCommand};
+use robot::protocol::line::{BaseLink, LineReader, LinkError, MAX_LINE, PanTiltLink};
 use robot::protocol::sick::{Frame, MAX_LENGTH, MeasuredValues, Telegram, TelegramDecoder};
-use sim::firmware::BaseFirmware;
+use sim::firmware::{BaseFirmware, PanTiltFirmware};
 use std::io::{self, Read, Write};
 
 /// The twin's base firmware as a byte stream: what is written reaches its receive interrupt,
@@ -92,6 +92,63 @@ fn an_unknown_letter_gets_no_answer_and_the_line_stays_usable() {
     base.0.send("x12\n").unwrap();
     assert!(matches!(base.0.read_line(), Err(LinkError::Timeout)));
     base.command(&DriveCommand::Stop).unwrap();
+}
+
+/// The twin's pan-tilt firmware as a byte stream: a line reaches `do_command` at its newline.
+struct PanTiltPort(PanTiltFirmware, Vec<u8>, Vec<u8>);
+
+impl Read for PanTiltPort {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        let out = self.0.take_output();
+        self.2.extend(out);
+        if self.2.is_empty() {
+            return Err(io::ErrorKind::TimedOut.into());
+        }
+        let n = self.2.len().min(buf.len());
+        buf[..n].copy_from_slice(&self.2[..n]);
+        self.2.drain(..n);
+        Ok(n)
+    }
+}
+
+impl Write for PanTiltPort {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        for &c in buf {
+            self.1.push(c);
+            if c == b'\n' {
+                let line = std::mem::take(&mut self.1);
+                self.0.execute_line(&line);
+            }
+        }
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> io::Result<()> {
+        Ok(())
+    }
+}
+
+#[test]
+fn the_pan_tilt_link_and_the_twin_firmware_agree_byte_for_byte() {
+    let fw = PanTiltFirmware::power_on(false, false, false);
+    let mut head = PanTiltLink::new(PanTiltPort(fw, Vec::new(), Vec::new()));
+    assert_eq!(head.0.read_line().unwrap(), "Sistema ROCA-PANT-TILT v1.0\n");
+    for command in [
+        PanTiltCommand::PanRamp(Ramp::POWER_ON),
+        PanTiltCommand::TiltRamp(Ramp::POWER_ON),
+        PanTiltCommand::Pan(3),
+        PanTiltCommand::Tilt(31),
+    ] {
+        head.command(&command)
+            .unwrap_or_else(|e| panic!("{command:?}: {e}"));
+    }
+    // `l` answers the nine fields of `report_status`; the moves just started.
+    let status = head.status(Stamp::ZERO).unwrap();
+    assert_eq!((status.pan, status.tilt), (0, 0));
+    assert!(status.pan_on && status.tilt_on, "{status:?}");
+    head.0.acknowledged("*\n", '*').unwrap();
+    // The firmware has no `p`: the prose's stop request gets no answer, as the code says.
+    head.0.send("p\n").unwrap();
+    assert!(matches!(head.0.read_line(), Err(LinkError::Timeout)));
 }
 
 proptest! {

@@ -28,6 +28,7 @@ const SPEED: f64 = 10.0;
 /// wheel), and a count of difference turns it by 0.33 mm / 0.33 m track = 1 mrad, which over the
 /// next 0.5 m moves the pose 0.5 mm. Over the 9 motions here that bounds the difference by
 /// about 9 × (0.33 + 0.5 × 4.5) ≈ 2.3 cm and 9 mrad; the test asks for 2.5 cm and 0.6°.
+/// Measured: no difference at all, here and over the whole default tour (README).
 const ODOMETRY_TOLERANCE_M: f64 = 0.025;
 const ODOMETRY_TOLERANCE_DEG: f64 = 0.6;
 
@@ -64,14 +65,14 @@ fn direct(scenario: &Scenario) -> Run {
 }
 
 /// A served twin on free local ports, running in its own thread until dropped.
-struct Served_ {
+struct ServedTwin {
     base: String,
     laser: String,
     stop: Arc<AtomicBool>,
     thread: Option<JoinHandle<Vec<String>>>,
 }
 
-impl Drop for Served_ {
+impl Drop for ServedTwin {
     fn drop(&mut self) {
         self.stop.store(true, Ordering::Relaxed);
         if let Some(t) = self.thread.take() {
@@ -80,7 +81,7 @@ impl Drop for Served_ {
     }
 }
 
-fn serve(scenario: &Scenario) -> Served_ {
+fn serve(scenario: &Scenario) -> ServedTwin {
     let twin = Twin::new(
         &scenario.world,
         &scenario.robot,
@@ -112,7 +113,7 @@ fn serve(scenario: &Scenario) -> Served_ {
             log
         })
     };
-    Served_ {
+    ServedTwin {
         base: find(Served::Base),
         laser: find(Served::Laser),
         stop,
