@@ -222,6 +222,7 @@ enum Retry {
 struct Ctx<'a> {
     clock: &'a dyn Clock,
     poll: Duration,
+    attempts: u32,
     events: &'a mut Vec<LinkEvent>,
 }
 
@@ -370,12 +371,11 @@ impl LineDevice {
         letter: char,
         extra: Duration,
         retry: Retry,
-        attempts: u32,
         ctx: &mut Ctx<'_>,
     ) -> Result<(Stamp, String), SerialError> {
         let request = line.trim_end().to_string();
         let attempts = if retry == Retry::Yes {
-            attempts.max(1)
+            ctx.attempts.max(1)
         } else {
             1
         };
@@ -562,16 +562,26 @@ impl SerialRobot {
         retry: Retry,
     ) -> Result<(Stamp, String), SerialError> {
         let extra = works_for + self.config.reply_timeout;
-        let (mut ctx, attempts) = (
-            Ctx {
-                clock: self.clock.as_ref(),
-                poll: self.config.poll,
-                events: &mut self.events,
-            },
-            self.config.attempts,
-        );
-        self.base
-            .request(line, letter, extra, retry, attempts, &mut ctx)
+        let (mut ctx, device) = self.line(Device::Base)?;
+        device.request(line, letter, extra, retry, &mut ctx)
+    }
+
+    /// What talking on a line needs, and the line of `device` (the base unless the pan-tilt).
+    fn line(&mut self, device: Device) -> Result<(Ctx<'_>, &mut LineDevice), SerialError> {
+        let line = match device {
+            Device::PanTilt => self
+                .pan_tilt
+                .as_mut()
+                .ok_or(SerialError::Unsupported("pan-tilt unit"))?,
+            _ => &mut self.base,
+        };
+        let ctx = Ctx {
+            clock: self.clock.as_ref(),
+            poll: self.config.poll,
+            attempts: self.config.attempts,
+            events: &mut self.events,
+        };
+        Ok((ctx, line))
     }
 
     fn pan_tilt_request(
@@ -582,19 +592,8 @@ impl SerialRobot {
     ) -> Result<(Stamp, String), SerialError> {
         self.wait_pan_tilt_ready()?;
         let extra = works_for + self.config.reply_timeout;
-        let (mut ctx, attempts) = (
-            Ctx {
-                clock: self.clock.as_ref(),
-                poll: self.config.poll,
-                events: &mut self.events,
-            },
-            self.config.attempts,
-        );
-        let device = self
-            .pan_tilt
-            .as_mut()
-            .ok_or(SerialError::Unsupported("pan-tilt unit"))?;
-        device.request(line, letter, extra, Retry::Yes, attempts, &mut ctx)
+        let (mut ctx, device) = self.line(Device::PanTilt)?;
+        device.request(line, letter, extra, Retry::Yes, &mut ctx)
     }
 
     /// Waits until the pan-tilt has finished homing: a `*` must come back, and if the unit is
@@ -606,30 +605,13 @@ impl SerialRobot {
         }
         let extra = self.config.reply_timeout;
         let homing_limit = self.config.homing_limit;
-        let (mut ctx, attempts) = (
-            Ctx {
-                clock: self.clock.as_ref(),
-                poll: self.config.poll,
-                events: &mut self.events,
-            },
-            self.config.attempts,
-        );
-        let device = self
-            .pan_tilt
-            .as_mut()
-            .ok_or(SerialError::Unsupported("pan-tilt unit"))?;
-        device.request("*\n", '*', extra, Retry::Yes, attempts, &mut ctx)?;
+        let (mut ctx, device) = self.line(Device::PanTilt)?;
+        device.request("*\n", '*', extra, Retry::Yes, &mut ctx)?;
         let narrated = device.take_skipped();
         let mut homing = !narrated.is_empty() && !narrated.iter().any(|l| l == pt::READY);
         if !homing {
-            let (stamp, reply) = device.request(
-                pt::STATUS_REQUEST,
-                'l',
-                extra,
-                Retry::Yes,
-                attempts,
-                &mut ctx,
-            )?;
+            let (stamp, reply) =
+                device.request(pt::STATUS_REQUEST, 'l', extra, Retry::Yes, &mut ctx)?;
             let status = pt::parse_status(&reply, stamp).map_err(|source| SerialError::Reply {
                 device: Device::PanTilt,
                 source,
@@ -960,12 +942,7 @@ impl SonarRing for SerialRobot {
                 self.base_request(base::SONAR_REQUEST, 's', Duration::ZERO, Retry::Yes)?;
             let deadline = self.clock.now() + self.config.reply_timeout;
             let mut lines = vec![first];
-            let mut ctx = Ctx {
-                clock: self.clock.as_ref(),
-                poll: self.config.poll,
-                events: &mut self.events,
-            };
-            let device = &mut self.base;
+            let (mut ctx, device) = self.line(Device::Base)?;
             while lines.len() < count {
                 match device.next_line(deadline, &mut ctx) {
                     Outcome::Reply(_, line) => lines.push(line),
