@@ -14,6 +14,8 @@
 //! - [`serve`]: `twin serve`, the twin's three devices offered byte for byte on TCP ports or
 //!   pseudo-terminals, for the real backend (`SerialRobot`) and legacy tools;
 //! - [`drive`]: `twin drive`, a scenario's script through any backend (the real robot);
+//! - [`montecarlo`]: `twin montecarlo`, the thesis's Table 5.1 study, parallel, resumable and
+//!   shardable;
 //! - [`run`] and [`output`]: the `twin run` job and the files it writes;
 //! - [`pairs`]: scan pairs with known truth, for testing and measuring the matchers;
 //! - [`replay`]: localisation over recorded logs (`twin map`) and scan pairs (`twin match`).
@@ -26,6 +28,7 @@ pub mod config;
 pub mod drive;
 pub mod firmware;
 pub mod laser;
+pub mod montecarlo;
 pub mod motor;
 pub mod pairs;
 pub mod pan_tilt;

@@ -6,6 +6,8 @@
 //! twin match --matcher lorentz < pairs.jsonl > results.jsonl
 //! twin serve scenarios/lab-tour.toml --base tcp:127.0.0.1:4001 --laser tcp:127.0.0.1:4003
 //! twin drive scenarios/lab-tour.toml --base /dev/ttyUSB0 --laser /dev/ttyUSB2 [--out DIR]
+//! twin montecarlo studies/table-5-1.toml [--out DIR] [--threads N] [--shard K/N]
+//! twin montecarlo merge DIR... --out DIR
 //! ```
 
 use anyhow::{Context, Result};
@@ -123,6 +125,11 @@ enum Command {
         #[arg(long, short)]
         quiet: bool,
     },
+    /// Run a Monte Carlo study of the scan matchers (the thesis's Table 5.1 by default): every
+    /// matcher on the same twin scan pairs at each outlier rate; resumable, shardable, and
+    /// bit-identical whatever the thread count. `twin montecarlo merge DIR... --out DIR` combines
+    /// shards.
+    Montecarlo(MontecarloArgs),
     /// Match scan pairs read as JSON Lines from stdin, one result line per pair on stdout.
     ///
     /// Input: {"ref": {"angle_min", "angle_increment", "range_max", "ranges": [...]}, "cur": {...},
@@ -132,6 +139,48 @@ enum Command {
         /// The matcher: ls, lorentz, lorentz-lines or mbicp.
         #[arg(long, default_value = "lorentz")]
         matcher: MatcherKind,
+    },
+}
+
+#[derive(clap::Args)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+struct MontecarloArgs {
+    #[command(subcommand)]
+    merge: Option<MontecarloCommand>,
+    /// The study file (e.g. studies/table-5-1.toml).
+    #[arg(required = true)]
+    study: Option<PathBuf>,
+    /// Output folder [default: out/montecarlo-STUDY-NAME]; started again with the same folder,
+    /// the run finishes the missing trials.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Worker threads (0: all cores).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    /// Run only the trials i with i mod N = K (K counts from 0).
+    #[arg(long, default_value = "0/1")]
+    shard: sim::montecarlo::Shard,
+    /// Run at most this many trials now and stop (run again to go on).
+    #[arg(long)]
+    max_trials: Option<u64>,
+    /// Print nothing but errors.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+#[derive(Subcommand)]
+enum MontecarloCommand {
+    /// Combine finished shard folders into the files a single run would have written.
+    Merge {
+        /// The shard folders, one per shard.
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+        /// Where to write the merged results.
+        #[arg(long)]
+        out: PathBuf,
+        /// Print nothing but errors.
+        #[arg(long, short)]
+        quiet: bool,
     },
 }
 
@@ -161,6 +210,7 @@ fn run(cli: Cli) -> Result<()> {
             quiet,
         } => map_command(log, matcher, out, keyframe_m, quiet),
         Command::Match { matcher } => match_command(matcher),
+        Command::Montecarlo(args) => montecarlo_command(args),
         Command::Serve {
             scenario,
             base,
@@ -471,6 +521,83 @@ fn run_command(path: PathBuf, out: Option<PathBuf>, seed: Option<u64>, quiet: bo
         for f in &written.files {
             println!("  {}", f.display());
         }
+    }
+    Ok(())
+}
+
+fn montecarlo_command(args: MontecarloArgs) -> Result<()> {
+    use sim::montecarlo::{RunOptions, merge, run_study};
+    if let Some(MontecarloCommand::Merge { dirs, out, quiet }) = args.merge {
+        let (summary, files) = merge(&dirs, &out)?;
+        if !quiet {
+            print!("{}", summary.table());
+            println!("merged {} shard folders into {}", dirs.len(), out.display());
+            for f in &files {
+                println!("  {}", f.display());
+            }
+        }
+        return Ok(());
+    }
+    let path = args
+        .study
+        .expect("clap requires the study without a subcommand");
+    let study = sim::config::Study::load(&path)?;
+    let dir = args
+        .out
+        .unwrap_or_else(|| sim::montecarlo::default_dir(&study));
+    let bar = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(0).with_style(
+            ProgressStyle::with_template(
+                "{prefix} [{bar:30}] {pos}/{len} trials {per_sec} ETA {eta}",
+            )
+            .expect("valid template")
+            .progress_chars("=> "),
+        )
+    };
+    bar.set_prefix(format!("{} (shard {})", study.name, args.shard));
+    let options = RunOptions {
+        threads: args.threads,
+        shard: args.shard,
+        max_trials: args.max_trials,
+    };
+    let report = run_study(&study, &dir, &options, |done, total| {
+        bar.set_length(total);
+        bar.set_position(done);
+    })?;
+    bar.finish_and_clear();
+    if args.quiet {
+        return Ok(());
+    }
+    if report.resumed > 0 {
+        println!(
+            "resumed: {} trials were already done in {}",
+            report.resumed,
+            dir.display()
+        );
+    }
+    let rate = report.ran as f64 / report.wall_seconds.max(1e-9);
+    println!(
+        "{} trials run in {:.1} s ({rate:.0} trials/s, {} matchers each)",
+        report.ran,
+        report.wall_seconds,
+        study.matchers.len()
+    );
+    match &report.summary {
+        Some(summary) => {
+            print!("{}", summary.table());
+            println!("wrote {}", dir.display());
+            for f in &report.files {
+                println!("  {}", f.display());
+            }
+        }
+        None => println!(
+            "{} of {} trials of shard {} done; run the same command again to go on",
+            report.resumed + report.ran,
+            report.owned,
+            args.shard
+        ),
     }
     Ok(())
 }

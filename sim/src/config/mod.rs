@@ -6,10 +6,12 @@
 mod error;
 pub mod robot_file;
 pub mod scenario;
+pub mod study;
 pub mod values;
 pub mod world;
 
 pub use error::ConfigError;
 pub use robot_file::RobotDescription;
 pub use scenario::{NoiseSettings, Scenario};
+pub use study::Study;
 pub use world::{Material, Wall, WorldDescription};

@@ -293,7 +293,7 @@ impl Scenario {
 }
 
 /// Loads the file a scenario names; an unreadable file is reported at the scenario's line.
-fn load_named<T>(
+pub(crate) fn load_named<T>(
     source: &Source,
     name: &Spanned<String>,
     field: &str,
@@ -364,7 +364,7 @@ struct TourFile {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct NoiseFile {
+pub(crate) struct NoiseFile {
     slip_sigma_sqrt_m: Option<NonNegative>,
     wheel_diameter_ratio_error: Option<RelativeError>,
     wheel_scale_error: Option<RelativeError>,
@@ -375,7 +375,11 @@ struct NoiseFile {
 
 impl NoiseFile {
     /// Overrides the settings this table names.
-    fn apply(&self, noise: &mut NoiseSettings, source: &Source) -> Result<(), ConfigError> {
+    pub(crate) fn apply(
+        &self,
+        noise: &mut NoiseSettings,
+        source: &Source,
+    ) -> Result<(), ConfigError> {
         let set = |target: &mut f64, value: Option<f64>| {
             if let Some(v) = value {
                 *target = v;
