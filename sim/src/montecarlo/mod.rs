@@ -91,6 +91,9 @@ pub enum StudyError {
         /// What went wrong.
         message: String,
     },
+    /// The worker threads cannot start.
+    #[error("cannot start the worker threads: {0}")]
+    Threads(String),
     /// Shards that do not make a whole study.
     #[error("cannot merge: {0}")]
     Merge(String),
@@ -453,7 +456,7 @@ pub fn run_study(
     let progress_dir = dir.join("progress");
     std::fs::create_dir_all(&progress_dir).map_err(io_error(&progress_dir))?;
     claim(dir, study, options.shard)?;
-    let log = Log::open(&progress_dir, study)?;
+    let mut log = Log::open(&progress_dir, study)?;
     let done = log.done.clone();
     let owned: Vec<u64> = (0..study.total_trials())
         .filter(|&i| options.shard.owns(i))
@@ -468,11 +471,10 @@ pub fn run_study(
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(options.threads)
         .build()
-        .map_err(|e| StudyError::Merge(format!("cannot start the worker threads: {e}")))?;
+        .map_err(|e| StudyError::Threads(e.to_string()))?;
     let trials = Trials::new(study);
     let chunk = CHUNK_PER_THREAD * pool.current_num_threads();
     let started = Instant::now();
-    let mut log = log;
     let mut finished = resumed;
     progress(finished, owned.len() as u64);
     for indices in missing.chunks(chunk) {
