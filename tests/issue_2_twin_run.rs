@@ -79,8 +79,11 @@ fn the_main_job_writes_its_five_files() {
     let _ = std::fs::remove_dir_all(out);
 }
 
+/// Every scenario runs all its steps and keeps scans. Whether it may touch a wall or must drive
+/// is each scenario's own `[[check]]` now (issue 7: `wall-collision` must collide,
+/// `pan-tilt-sweep` stands still).
 #[test]
-fn every_shipped_scenario_runs_to_its_end_without_collision() {
+fn every_shipped_scenario_runs_to_its_end() {
     let mut names: Vec<String> = std::fs::read_dir(repo().join("scenarios"))
         .unwrap()
         .filter_map(|e| {
@@ -94,9 +97,13 @@ fn every_shipped_scenario_runs_to_its_end_without_collision() {
         let s = scenario(&name);
         let record = run_scenario(&s, &RunOptions::default(), |_, _| {})
             .unwrap_or_else(|e| panic!("{name}: {e}"));
-        assert_eq!(record.collisions, 0, "{name} hit a wall");
         assert_eq!(record.steps, s.steps.len(), "{name}");
         assert!(!record.scans.is_empty(), "{name} kept no scan");
-        assert!(record.distance_m > 1.0, "{name} did not drive");
+        let collision_expected = s.checks.iter().any(|c| {
+            c.kind == sim::checks::CheckKind::Collisions && c.bounds.min.is_some_and(|m| m >= 1.0)
+        });
+        if !collision_expected {
+            assert_eq!(record.collisions, 0, "{name} hit a wall");
+        }
     }
 }

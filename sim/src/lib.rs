@@ -16,6 +16,7 @@
 //! - [`drive`]: `twin drive`, a scenario's script through any backend (the real robot);
 //! - [`montecarlo`]: `twin montecarlo`, the thesis's Table 5.1 study, parallel, resumable and
 //!   shardable;
+//! - [`checks`]: a scenario's `[[check]]` bounds, evaluated on its run;
 //! - [`run`] and [`output`]: the `twin run` job and the files it writes;
 //! - [`pairs`]: scan pairs with known truth, for testing and measuring the matchers;
 //! - [`replay`]: localisation over recorded logs (`twin map`) and scan pairs (`twin match`).
@@ -24,6 +25,7 @@
 #![allow(clippy::result_large_err)]
 
 pub mod battery;
+pub mod checks;
 pub mod config;
 pub mod drive;
 pub mod firmware;

@@ -30,6 +30,26 @@ pub enum Step {
         /// Duration, seconds.
         seconds: f64,
     },
+    /// Move the pan-tilt head to positions `pan` and `tilt` and wait until it has stopped
+    /// (`head PAN TILT`).
+    Head {
+        /// Pan position, 0..=254.
+        pan: u8,
+        /// Tilt position, 0..=100.
+        tilt: u8,
+    },
+    /// A 3D sweep at one pan (thesis §5.3.2): tilt the laser from `from` to `to` in steps of
+    /// `step` positions, one scan at rest at each (`sweep PAN FROM TO STEP`).
+    Sweep {
+        /// Pan position, 0..=254.
+        pan: u8,
+        /// First tilt position.
+        from: u8,
+        /// Last tilt position (may be below `from`: the sweep goes down).
+        to: u8,
+        /// Positions between scans, at least 1.
+        step: u8,
+    },
 }
 
 /// A step that cannot be parsed or carried out.
@@ -80,8 +100,27 @@ impl Step {
                     C::TurnRight(tenths)
                 }))
             }
-            Step::Pause { .. } => None,
+            Step::Pause { .. } | Step::Head { .. } | Step::Sweep { .. } => None,
         })
+    }
+
+    /// Whether the step drives the pan-tilt head.
+    pub fn uses_head(&self) -> bool {
+        matches!(self, Step::Head { .. } | Step::Sweep { .. })
+    }
+
+    /// The tilt positions of a sweep, in order.
+    pub fn sweep_tilts(from: u8, to: u8, step: u8) -> Vec<u8> {
+        let step = i32::from(step.max(1));
+        let (from, to) = (i32::from(from), i32::from(to));
+        let dir = if to >= from { 1 } else { -1 };
+        let mut tilts = Vec::new();
+        let mut t = from;
+        while (t - to) * dir <= 0 {
+            tilts.push(t as u8);
+            t += dir * step;
+        }
+        tilts
     }
 }
 
@@ -127,6 +166,48 @@ impl FromStr for Step {
                 }
                 Ok(Step::Pause { seconds })
             }
+            "head" | "sweep" => {
+                let (unit, count) = if keyword == "head" {
+                    ("PAN TILT: positions, pan 0..=254, tilt 0..=100", 2)
+                } else {
+                    (
+                        "PAN FROM TO STEP: positions, pan 0..=254, tilts 0..=100, step 1..",
+                        4,
+                    )
+                };
+                let bad = || StepError::Number {
+                    keyword: if keyword == "head" { "head" } else { "sweep" },
+                    unit,
+                    text: rest.trim().to_string(),
+                };
+                let values: Vec<u8> = rest
+                    .split_whitespace()
+                    .map(|v| v.parse::<u8>().map_err(|_| bad()))
+                    .collect::<Result<_, _>>()?;
+                if values.len() != count
+                    || values[0] > crate::hardware::PAN_MAX
+                    || values[1..]
+                        .iter()
+                        .take(2)
+                        .any(|&t| t > crate::hardware::TILT_MAX)
+                    || (count == 4 && values[3] == 0)
+                {
+                    return Err(bad());
+                }
+                Ok(if count == 2 {
+                    Step::Head {
+                        pan: values[0],
+                        tilt: values[1],
+                    }
+                } else {
+                    Step::Sweep {
+                        pan: values[0],
+                        from: values[1],
+                        to: values[2],
+                        step: values[3],
+                    }
+                })
+            }
             _ => Ok(Step::Firmware(parse_command_text(text)?)),
         }
     }
@@ -144,6 +225,13 @@ impl fmt::Display for Step {
             Step::Move { metres } => write!(f, "move {metres}"),
             Step::Turn { degrees } => write!(f, "turn {degrees}"),
             Step::Pause { seconds } => write!(f, "pause {seconds}"),
+            Step::Head { pan, tilt } => write!(f, "head {pan} {tilt}"),
+            Step::Sweep {
+                pan,
+                from,
+                to,
+                step,
+            } => write!(f, "sweep {pan} {from} {to} {step}"),
         }
     }
 }
@@ -168,6 +256,27 @@ mod tests {
             "pause 1".parse::<Step>().unwrap().to_line(&G).unwrap(),
             None
         );
+    }
+
+    #[test]
+    fn head_steps_parse_print_and_expand() {
+        for text in ["head 64 31", "sweep 127 10 60 5"] {
+            let step: Step = text.parse().unwrap();
+            assert_eq!(step.to_string(), text);
+            assert!(step.uses_head());
+            assert_eq!(step.to_line(&G).unwrap(), None);
+        }
+        assert_eq!(Step::sweep_tilts(10, 20, 5), vec![10, 15, 20]);
+        assert_eq!(Step::sweep_tilts(20, 8, 5), vec![20, 15, 10]);
+        for bad in [
+            "head 300 10",
+            "head 10 101",
+            "head 10",
+            "sweep 1 2 3 0",
+            "sweep 1 2 3",
+        ] {
+            assert!(bad.parse::<Step>().is_err(), "{bad}");
+        }
     }
 
     #[test]

@@ -21,7 +21,9 @@
 use crate::control::script::{Step, StepError};
 use crate::drive_geometry::DriveGeometry;
 use crate::geometry::Pose2;
-use crate::hardware::{DriveBase, DriveStatus, DriveWait, HardwareError, Laser, LaserScan};
+use crate::hardware::{
+    DriveBase, DriveStatus, DriveWait, HardwareError, Laser, LaserScan, PanTilt, PanTiltPosition,
+};
 use crate::odometry::{Odometer, PoseHistory};
 use crate::protocol::base::DriveLine;
 use crate::time::Stamp;
@@ -150,7 +152,7 @@ pub fn run_tour<R, F>(
     mut observer: F,
 ) -> Result<TourReport, TourError<R::Error>>
 where
-    R: DriveBase + Laser,
+    R: DriveBase + Laser + PanTilt,
     F: FnMut(TourEvent<'_>),
 {
     let mut tour = Tour {
@@ -230,7 +232,7 @@ impl Tour {
         observer: &mut F,
     ) -> Result<(), Failure<R::Error>>
     where
-        R: DriveBase + Laser,
+        R: DriveBase + Laser + PanTilt,
         F: FnMut(TourEvent<'_>),
     {
         match step.to_line(&self.geometry).map_err(Failure::Step)? {
@@ -257,15 +259,79 @@ impl Tour {
                 robot.wait_drive(wait).map_err(Failure::Hardware)?;
                 self.poll_status(robot, observer)?;
             }
-            None => {
-                let Step::Pause { seconds } = *step else {
-                    unreachable!("only a pause sends nothing")
-                };
-                let from = self.poll_status(robot, observer)?.stamp;
-                let until = from + Duration::from_secs_f64(seconds);
-                while self.service(robot, self.config.poll, observer)?.stamp < until {}
-            }
+            None => match *step {
+                Step::Pause { seconds } => {
+                    let from = self.poll_status(robot, observer)?.stamp;
+                    let until = from + Duration::from_secs_f64(seconds);
+                    while self.service(robot, self.config.poll, observer)?.stamp < until {}
+                }
+                Step::Head { pan, tilt } => {
+                    self.move_head(robot, PanTiltPosition { pan, tilt })?;
+                }
+                Step::Sweep {
+                    pan,
+                    from,
+                    to,
+                    step,
+                } => {
+                    let settle = match self.config.pacing {
+                        Pacing::StopAndGo { settle } => settle,
+                        Pacing::Polling { .. } => Duration::from_millis(100),
+                    };
+                    for tilt in Step::sweep_tilts(from, to, step) {
+                        let stopped = self.move_head(robot, PanTiltPosition { pan, tilt })?;
+                        self.scan_at_rest(robot, stopped, settle, observer)?;
+                    }
+                }
+                _ => unreachable!("only pauses and head steps send no drive line"),
+            },
         }
+        Ok(())
+    }
+
+    /// Moves the head and waits until both its motors are off; returns when they were seen off.
+    fn move_head<R>(
+        &mut self,
+        robot: &mut R,
+        target: PanTiltPosition,
+    ) -> Result<Stamp, Failure<R::Error>>
+    where
+        R: PanTilt,
+    {
+        // Polls every 50 firmware ticks; a full pan turn takes about 8 s.
+        let polls = (self.config.motion_timeout.as_millis() / 50).max(1) as u32;
+        let status = robot
+            .move_pan_tilt_to(target, 50, polls)
+            .map_err(Failure::Hardware)?;
+        if !status.idle() {
+            return Err(Failure::Stuck(self.config.motion_timeout));
+        }
+        Ok(status.stamp)
+    }
+
+    /// Hands over the first scan measured `settle` after the robot (or head) stopped at
+    /// `stopped`, with the odometry at rest; scans measured before are skipped.
+    fn scan_at_rest<R, F>(
+        &mut self,
+        robot: &mut R,
+        stopped: Stamp,
+        settle: Duration,
+        observer: &mut F,
+    ) -> Result<(), Failure<R::Error>>
+    where
+        R: DriveBase + Laser,
+        F: FnMut(TourEvent<'_>),
+    {
+        self.pending.clear();
+        let scan = robot
+            .read_scan_since(stopped + settle, self.config.motion_timeout)
+            .map_err(Failure::Hardware)?
+            .ok_or(Failure::Stuck(self.config.motion_timeout))?;
+        self.scans += 1;
+        observer(TourEvent::Scan {
+            scan: &scan,
+            odometry: self.odometer.pose(),
+        });
         Ok(())
     }
 
@@ -301,19 +367,8 @@ impl Tour {
                 return Err(Failure::Stuck(self.config.motion_timeout));
             }
         };
-        let rest_pose = self.odometer.pose();
         // Scans measured during the motion are of no use without odometry: skip them.
-        self.pending.clear();
-        let scan = robot
-            .read_scan_since(stopped.stamp + settle, self.config.motion_timeout)
-            .map_err(Failure::Hardware)?
-            .ok_or(Failure::Stuck(self.config.motion_timeout))?;
-        self.scans += 1;
-        observer(TourEvent::Scan {
-            scan: &scan,
-            odometry: rest_pose,
-        });
-        Ok(())
+        self.scan_at_rest(robot, stopped.stamp, settle, observer)
     }
 
     /// Reads scans and polls the base until both drive motors are off.

@@ -2,6 +2,7 @@
 //!
 //! ```text
 //! twin run scenarios/lab-tour.toml [--out DIR] [--seed N]
+//! twin check scenarios/
 //! twin map tests/data/mit-csail.clf [--matcher NAME] [--out DIR]
 //! twin match --matcher lorentz < pairs.jsonl > results.jsonl
 //! twin serve scenarios/lab-tour.toml --base tcp:127.0.0.1:4001 --laser tcp:127.0.0.1:4003
@@ -33,7 +34,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Run a scenario headless, as fast as possible, and write trajectories, scans, a summary
-    /// and a map picture.
+    /// and a map picture; evaluate its checks and fail if one is out of bounds.
     Run {
         /// The scenario file (e.g. scenarios/lab-tour.toml).
         scenario: PathBuf,
@@ -44,6 +45,15 @@ enum Command {
         #[arg(long)]
         seed: Option<u64>,
         /// Print nothing but errors.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+    /// Run every scenario of a folder and evaluate its checks; print a table, exit non-zero if
+    /// any check fails.
+    Check {
+        /// The folder (e.g. scenarios/).
+        dir: PathBuf,
+        /// Print only the table and failures.
         #[arg(long, short)]
         quiet: bool,
     },
@@ -210,6 +220,7 @@ fn run(cli: Cli) -> Result<()> {
             quiet,
         } => map_command(log, matcher, out, keyframe_m, quiet),
         Command::Match { matcher } => match_command(matcher),
+        Command::Check { dir, quiet } => check_command(dir, quiet),
         Command::Montecarlo(args) => montecarlo_command(args),
         Command::Serve {
             scenario,
@@ -521,6 +532,101 @@ fn run_command(path: PathBuf, out: Option<PathBuf>, seed: Option<u64>, quiet: bo
         for f in &written.files {
             println!("  {}", f.display());
         }
+    }
+    let report = sim::checks::evaluate(&scenario, &record);
+    if !report.outcomes.is_empty() && (!quiet || !report.passed()) {
+        print!("{report}");
+    }
+    let failed = report.failures().count();
+    if failed > 0 {
+        anyhow::bail!(
+            "{}: {failed} of {} check(s) failed",
+            path.display(),
+            report.outcomes.len()
+        );
+    }
+    Ok(())
+}
+
+fn check_command(dir: PathBuf, quiet: bool) -> Result<()> {
+    use rayon::prelude::*;
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .with_context(|| format!("reading {}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file() && p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        anyhow::bail!(
+            "{}: no scenario files (*.toml) in this folder",
+            dir.display()
+        );
+    }
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(files.len() as u64).with_style(
+            ProgressStyle::with_template(
+                "check [{bar:30}] {pos}/{len} scenarios {elapsed_precise}",
+            )
+            .expect("valid template")
+            .progress_chars("=> "),
+        )
+    };
+    // Per file: its check report and wall seconds, or why it could not run.
+    type Outcome = Result<(sim::checks::CheckReport, f64), String>;
+    let results: Vec<(PathBuf, Outcome)> = files
+        .par_iter()
+        .map(|path| {
+            let started = std::time::Instant::now();
+            let outcome = Scenario::load(path)
+                .map_err(|e| e.to_string())
+                .and_then(|scenario| {
+                    let record = run_scenario(&scenario, &RunOptions::default(), |_, _| {})
+                        .map_err(|e| e.to_string())?;
+                    Ok((
+                        sim::checks::evaluate(&scenario, &record),
+                        started.elapsed().as_secs_f64(),
+                    ))
+                });
+            bar.inc(1);
+            (path.clone(), outcome)
+        })
+        .collect();
+    bar.finish_and_clear();
+    println!("| scenario | checks | passed | failed | seconds |");
+    println!("|---|---|---|---|---|");
+    let mut failed = 0;
+    for (path, result) in &results {
+        let name = path.file_stem().map_or("?".into(), |s| s.to_string_lossy());
+        match result {
+            Ok((report, seconds)) => {
+                let bad = report.failures().count();
+                failed += usize::from(bad > 0);
+                println!(
+                    "| {name} | {} | {} | {bad} | {seconds:.1} |",
+                    report.outcomes.len(),
+                    report.outcomes.len() - bad
+                );
+            }
+            Err(_) => {
+                failed += 1;
+                println!("| {name} | - | - | error | - |");
+            }
+        }
+    }
+    for (path, result) in &results {
+        match result {
+            Ok((report, _)) if !report.passed() => {
+                println!();
+                print!("{report}");
+            }
+            Err(e) => println!("\n{}: {e}", path.display()),
+            _ => {}
+        }
+    }
+    if failed > 0 {
+        anyhow::bail!("{failed} of {} scenario(s) failed", results.len());
     }
     Ok(())
 }

@@ -22,9 +22,9 @@ const GHOST_MARGIN: f64 = 0.15;
 /// Points lower than this (metres) hit the floor.
 const FLOOR_BAND: f64 = 0.03;
 
-/// What a scan point hit, as the pictures colour it.
+/// What a scan point hit, as the pictures colour it and the checks count it.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
-pub(super) enum PointKind {
+pub enum PointKind {
     /// A wall or object.
     Surface,
     /// The floor (a tilted laser).
@@ -36,7 +36,7 @@ pub(super) enum PointKind {
 impl PointKind {
     /// What the world point `p` is: farther than 15 cm from every surface is a ghost, lower
     /// than 3 cm is the floor.
-    pub(super) fn of(map: &WorldMap, p: [f64; 3]) -> Self {
+    pub fn of(map: &WorldMap, p: [f64; 3]) -> Self {
         if map.distance_3d(p) > GHOST_MARGIN {
             PointKind::Ghost
         } else if p[2] < FLOOR_BAND {
