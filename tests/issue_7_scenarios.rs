@@ -59,7 +59,7 @@ scenarios! {
     scenario_l_corridor => "l-corridor.toml",
     scenario_lab_tour => "lab-tour.toml",
     scenario_lab_tour_210 => "lab-tour-210.toml",
-    scenario_lab_tour_ls => "lab-tour-ls.toml",
+    scenario_lab_tour_210_ls => "lab-tour-210-ls.toml",
     scenario_lab_tour_thesis => "lab-tour-thesis.toml",
     scenario_orthogonal_doors => "orthogonal-doors.toml",
     scenario_pan_tilt_sweep => "pan-tilt-sweep.toml",
