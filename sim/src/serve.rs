@@ -681,14 +681,7 @@ impl Server {
 
     /// Where each offered device can be reached.
     pub fn addresses(&self) -> Vec<(Served, String)> {
-        let mut out = vec![(Served::Base, self.base.face.address())];
-        if let Some(p) = &self.pan_tilt {
-            out.push((Served::PanTilt, p.face.address()));
-        }
-        if let Some(l) = &self.laser {
-            out.push((Served::Laser, l.face.address()));
-        }
-        out
+        self.faces(|face, _| face.address())
     }
 
     /// The twin.
@@ -698,12 +691,17 @@ impl Server {
 
     /// What each face has seen.
     pub fn stats(&self) -> Vec<(Served, FaceStats)> {
-        let mut out = vec![(Served::Base, self.base.stats.clone())];
+        self.faces(|_, stats| stats.clone())
+    }
+
+    /// `f` of each offered device's face and statistics, base first.
+    fn faces<T>(&self, f: impl Fn(&Face, &FaceStats) -> T) -> Vec<(Served, T)> {
+        let mut out = vec![(Served::Base, f(&self.base.face, &self.base.stats))];
         if let Some(p) = &self.pan_tilt {
-            out.push((Served::PanTilt, p.stats.clone()));
+            out.push((Served::PanTilt, f(&p.face, &p.stats)));
         }
         if let Some(l) = &self.laser {
-            out.push((Served::Laser, l.stats.clone()));
+            out.push((Served::Laser, f(&l.face, &l.stats)));
         }
         out
     }

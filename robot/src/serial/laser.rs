@@ -114,22 +114,21 @@ impl LaserLink {
 
     /// Takes the oldest reply, waiting up to `wait` of wall time for one.
     pub fn next_reply(&self, wait: Duration) -> Option<Frame> {
-        let mut state = self.shared.lock();
-        if state.replies.is_empty() && state.alive {
-            state = self
-                .shared
-                .changed
-                .wait_timeout(state, wait)
-                .unwrap_or_else(|e| e.into_inner())
-                .0;
-        }
-        state.replies.pop_front()
+        self.take_waiting(wait, |state| state.replies.pop_front())
     }
 
     /// Takes the oldest scan, waiting up to `wait` of wall time for one.
     pub fn next_scan(&self, wait: Duration) -> Option<LaserScan> {
+        self.take_waiting(wait, |state| state.scans.pop_front())
+    }
+
+    /// Takes what `take` finds, waiting once, up to `wait`, for the reader to add something.
+    fn take_waiting<T>(&self, wait: Duration, take: impl Fn(&mut State) -> Option<T>) -> Option<T> {
         let mut state = self.shared.lock();
-        if state.scans.is_empty() && state.alive {
+        if let Some(found) = take(&mut state) {
+            return Some(found);
+        }
+        if state.alive {
             state = self
                 .shared
                 .changed
@@ -137,7 +136,7 @@ impl LaserLink {
                 .unwrap_or_else(|e| e.into_inner())
                 .0;
         }
-        state.scans.pop_front()
+        take(&mut state)
     }
 
     /// Drops the scans measured before `t` without handing them over.

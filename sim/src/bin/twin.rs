@@ -344,17 +344,7 @@ fn drive_command(
     let clock: std::sync::Arc<dyn robot::Clock> =
         std::sync::Arc::new(sim::serve::WallClock::new(time_scale));
     let mut robot = SerialRobot::open(config, clock).context("opening the robot's devices")?;
-    let bar = if quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(scenario.steps.len() as u64).with_style(
-            ProgressStyle::with_template(
-                "{prefix} [{bar:30}] step {pos}/{len} {elapsed_precise} ETA {eta}",
-            )
-            .expect("valid template")
-            .progress_chars("=> "),
-        )
-    };
+    let bar = step_bar(quiet, scenario.steps.len());
     bar.set_prefix(format!("drive {}", scenario.name));
     let result = sim::drive::drive_scenario(&mut robot, &scenario, matcher, |done, _| {
         bar.set_position(done as u64)
@@ -483,17 +473,7 @@ fn match_command(matcher: MatcherKind) -> Result<()> {
 
 fn run_command(path: PathBuf, out: Option<PathBuf>, seed: Option<u64>, quiet: bool) -> Result<()> {
     let scenario = Scenario::load(&path)?;
-    let bar = if quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(scenario.steps.len() as u64).with_style(
-            ProgressStyle::with_template(
-                "{prefix} [{bar:30}] step {pos}/{len} {elapsed_precise} ETA {eta}",
-            )
-            .expect("valid template")
-            .progress_chars("=> "),
-        )
-    };
+    let bar = step_bar(quiet, scenario.steps.len());
     bar.set_prefix(scenario.name.clone());
     let options = RunOptions {
         seed,
@@ -706,4 +686,18 @@ fn montecarlo_command(args: MontecarloArgs) -> Result<()> {
         ),
     }
     Ok(())
+}
+
+/// The progress bar of a scripted run: steps done, elapsed time and ETA (hidden when quiet).
+fn step_bar(quiet: bool, steps: usize) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    ProgressBar::new(steps as u64).with_style(
+        ProgressStyle::with_template(
+            "{prefix} [{bar:30}] step {pos}/{len} {elapsed_precise} ETA {eta}",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
+    )
 }

@@ -629,6 +629,15 @@ fn read_lines(path: &Path) -> Result<Vec<String>, StudyError> {
         .collect())
 }
 
+/// The trial number a results line starts with (`u64::MAX` when it has none, which no study
+/// owns).
+fn trial_of(line: &str) -> u64 {
+    line.split(',')
+        .next()
+        .and_then(|f| f.parse().ok())
+        .unwrap_or(u64::MAX)
+}
+
 /// The trial number of a well-formed row of `study`, or `None`.
 fn complete_row(line: &str, study: &Study) -> Option<u64> {
     let fields: Vec<&str> = line.split(',').collect();
@@ -661,22 +670,14 @@ fn finish(
     let owned: BTreeSet<u64> = owned.iter().copied().collect();
     let mut rows: BTreeMap<u64, Vec<String>> = BTreeMap::new();
     for line in read_lines(&progress_dir.join("trials.log"))? {
-        let index: u64 = line
-            .split(',')
-            .next()
-            .and_then(|f| f.parse().ok())
-            .unwrap_or(u64::MAX);
+        let index = trial_of(&line);
         if owned.contains(&index) {
             rows.entry(index).or_default().push(line);
         }
     }
     let mut timings: BTreeMap<u64, Vec<String>> = BTreeMap::new();
     for line in read_lines(&progress_dir.join("timings.log"))? {
-        let index: u64 = line
-            .split(',')
-            .next()
-            .and_then(|f| f.parse().ok())
-            .unwrap_or(u64::MAX);
+        let index = trial_of(&line);
         timings.entry(index).or_default().push(line);
     }
     write_results(study, dir, rows, timings)
@@ -764,11 +765,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(Summary, Vec<PathBuf>), St
             )));
         }
         for line in lines.into_iter().skip(1) {
-            let index: u64 = line
-                .split(',')
-                .next()
-                .and_then(|f| f.parse().ok())
-                .unwrap_or(u64::MAX);
+            let index = trial_of(&line);
             if !shard.owns(index) {
                 return Err(StudyError::Merge(format!(
                     "{} has trial {index}, which is not shard {shard}'s",
@@ -778,11 +775,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(Summary, Vec<PathBuf>), St
             rows.entry(index).or_default().push(line);
         }
         for line in read_lines(&dir.join("timings.csv"))?.into_iter().skip(1) {
-            let index: u64 = line
-                .split(',')
-                .next()
-                .and_then(|f| f.parse().ok())
-                .unwrap_or(u64::MAX);
+            let index = trial_of(&line);
             timings.entry(index).or_default().push(line);
         }
     }
