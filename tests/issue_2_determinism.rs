@@ -4,8 +4,8 @@
 mod common;
 
 use common::*;
+use sim::commands::run::{RunOptions, run_scenario};
 use sim::output::write_all;
-use sim::run::{RunOptions, run_scenario};
 use std::path::{Path, PathBuf};
 
 const DETERMINISTIC: [&str; 3] = ["truth.tum", "odometry.tum", "scans.jsonl"];

@@ -8,8 +8,8 @@ use common::*;
 use robot::geometry::wrap_angle;
 use robot::hardware::{DriveBase, DriveWait, Laser, Ramp};
 use sim::config::NoiseSettings;
-use sim::firmware::BaseFirmware;
-use sim::motor::{Motor, MotorParams};
+use sim::devices::firmware::BaseFirmware;
+use sim::devices::motor::{Motor, MotorParams};
 use std::time::Duration;
 
 /// The firmware driving the twin's motor models, one 1.024 ms tick at a time, with nothing in

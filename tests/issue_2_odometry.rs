@@ -13,8 +13,8 @@ use robot::geometry::wrap_angle;
 use robot::hardware::{DriveBase, DriveCommand};
 use robot::odometry::{Odometer, integrate_arc};
 use sim::GroundTruth;
+use sim::commands::run::{RunOptions, run_scenario};
 use sim::config::NoiseSettings;
-use sim::run::{RunOptions, run_scenario};
 
 #[test]
 fn without_slip_or_mismatch_odometry_from_the_encoders_follows_truth() {

@@ -4,8 +4,8 @@
 mod common;
 
 use common::*;
+use sim::commands::run::{RunOptions, run_scenario};
 use sim::output::ScanLine;
-use sim::run::{RunOptions, run_scenario};
 use std::process::Command;
 
 #[test]
@@ -100,7 +100,8 @@ fn every_shipped_scenario_runs_to_its_end() {
         assert_eq!(record.steps, s.steps.len(), "{name}");
         assert!(!record.scans.is_empty(), "{name} kept no scan");
         let collision_expected = s.checks.iter().any(|c| {
-            c.kind == sim::checks::CheckKind::Collisions && c.bounds.min.is_some_and(|m| m >= 1.0)
+            c.kind == sim::config::checks::CheckKind::Collisions
+                && c.bounds.min.is_some_and(|m| m >= 1.0)
         });
         if !collision_expected {
             assert_eq!(record.collisions, 0, "{name} hit a wall");

@@ -8,7 +8,7 @@ mod common;
 use common::*;
 use robot::hardware::{Laser, LaserScan};
 use sim::config::NoiseSettings;
-use sim::laser::outliers::Outliers;
+use sim::config::Outliers;
 use std::time::Duration;
 
 fn scan(robot: &mut sim::SimRobot) -> LaserScan {
@@ -181,11 +181,15 @@ points = [[0.3, -5], [0.3, 5]]
 #[test]
 fn the_glass_door_run_draws_ghost_points_behind_the_glass() {
     let scenario = scenario("glass-door");
-    let record =
-        sim::run::run_scenario(&scenario, &sim::run::RunOptions::default(), |_, _| {}).unwrap();
+    let record = sim::commands::run::run_scenario(
+        &scenario,
+        &sim::commands::run::RunOptions::default(),
+        |_, _| {},
+    )
+    .unwrap();
     // Points placed from the true laser frame that lie far from every surface: where the glass
     // mirrored the pulse, they land behind the pane (the room, y > 2.4 m).
-    let map = sim::world_map::WorldMap::new(&scenario.world);
+    let map = sim::world::WorldMap::new(&scenario.world);
     let (mut ghosts, mut behind) = (0, 0);
     for r in &record.scans {
         for i in 0..r.scan.len() {

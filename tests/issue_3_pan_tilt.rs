@@ -334,7 +334,7 @@ fn the_level_laser_sees_exactly_what_the_2d_model_saw() {
     let scan_in = |world: &sim::config::WorldDescription| {
         let twin = Twin::new(world, &desc, &NoiseSettings::NONE, 8).unwrap();
         let laser = twin.laser().clone();
-        let map = sim::world_map::WorldMap::new(world);
+        let map = sim::world::WorldMap::new(world);
         let frame = laser.frame_on(world.start);
         assert_eq!(frame.tilt, 0.0);
         let mut rng = sim::rng::stream(8, "laser");
@@ -355,10 +355,10 @@ fn the_level_laser_sees_exactly_what_the_2d_model_saw() {
     let levelled = scan_at(&mut robot, 0, LEVEL);
     let frame = robot.laser_frame_at(levelled.stamp).unwrap();
     assert!(frame.tilt.abs() < 0.1f64.to_radians(), "{}", frame.tilt);
-    let flat_frame = sim::laser::LaserFrame { tilt: 0.0, ..frame };
+    let flat_frame = sim::devices::laser::LaserFrame { tilt: 0.0, ..frame };
     let mut rng = sim::rng::stream(8, "laser");
     let in_2d = robot.twin().laser().scan(
-        &sim::world_map::WorldMap::new(&world),
+        &sim::world::WorldMap::new(&world),
         None,
         flat_frame,
         Stamp::ZERO,
@@ -383,8 +383,12 @@ fn the_level_laser_sees_exactly_what_the_2d_model_saw() {
 #[test]
 fn the_tilted_scan_scenario_writes_its_picture_with_floor_hits_where_trigonometry_says() {
     let scenario = common::scenario("tilted-scan");
-    let record =
-        sim::run::run_scenario(&scenario, &sim::run::RunOptions::default(), |_, _| {}).unwrap();
+    let record = sim::commands::run::run_scenario(
+        &scenario,
+        &sim::commands::run::RunOptions::default(),
+        |_, _| {},
+    )
+    .unwrap();
     let head = record.pan_tilt.expect("the head was positioned");
     assert_eq!((head.pan, head.tilt), (0, 10));
     let scan = sim::output::last_tilted(&record).expect("scans were tilted");
@@ -412,8 +416,12 @@ fn the_tilted_scan_scenario_writes_its_picture_with_floor_hits_where_trigonometr
     assert!(text.contains("floor hits") && text.contains("by trigonometry"));
     // A level run writes no tilted picture.
     let level = common::scenario("orthogonal-doors");
-    let record =
-        sim::run::run_scenario(&level, &sim::run::RunOptions::default(), |_, _| {}).unwrap();
+    let record = sim::commands::run::run_scenario(
+        &level,
+        &sim::commands::run::RunOptions::default(),
+        |_, _| {},
+    )
+    .unwrap();
     assert!(sim::output::last_tilted(&record).is_none());
     let _ = std::fs::remove_dir_all(&dir);
 }

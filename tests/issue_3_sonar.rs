@@ -137,8 +137,12 @@ fn a_robot_without_a_ring_says_so() {
 #[test]
 fn the_sonar_ring_run_writes_one_full_reading_and_its_picture() {
     let scenario = scenario("sonar-ring");
-    let record =
-        sim::run::run_scenario(&scenario, &sim::run::RunOptions::default(), |_, _| {}).unwrap();
+    let record = sim::commands::run::run_scenario(
+        &scenario,
+        &sim::commands::run::RunOptions::default(),
+        |_, _| {},
+    )
+    .unwrap();
     let ring = record.sonar.as_ref().expect("the scenario fires the ring");
     assert_eq!(ring.echoes.times.len(), 16);
     let heard = ring

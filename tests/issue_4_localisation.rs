@@ -11,8 +11,8 @@ use rand::{RngExt, SeedableRng};
 use robot::Pose2;
 use robot::geometry::wrap_angle;
 use robot::localization::{MatcherKind, RangeScan, ScanMatcher};
-use sim::laser::outliers::Outliers;
-use sim::pairs::{PairMaker, ScanPair};
+use sim::commands::montecarlo::pairs::{PairMaker, ScanPair};
+use sim::config::Outliers;
 use std::io::Write;
 use std::process::{Command, Stdio};
 
@@ -249,7 +249,8 @@ fn the_l_corridor_of_002_appendix_e() {
 #[test]
 fn a_twin_run_localises_better_than_its_odometry() {
     let scenario = common::scenario("lab-tour");
-    let record = sim::run::run_scenario(&scenario, &Default::default(), |_, _| {}).unwrap();
+    let record =
+        sim::commands::run::run_scenario(&scenario, &Default::default(), |_, _| {}).unwrap();
     let loc = record.localisation.as_ref().expect("lab-tour localises");
     assert_eq!(loc.placed.len(), record.scans.len());
     let summary = sim::output::LocalisationSummary::of(&record, loc);
@@ -273,7 +274,8 @@ fn the_mit_csail_log_gives_a_sharper_map_than_odometry() {
     let log = robot::logs::read_log(&common::repo().join("tests/data/mit-csail.clf")).unwrap();
     assert_eq!(log.scans(), 1988);
     assert_eq!(log.skipped_lines(), 3, "the three comment lines");
-    let replay = sim::replay::replay_log(&log, MatcherKind::Lorentz, Default::default(), |_, _| {});
+    let replay =
+        sim::commands::map::replay_log(&log, MatcherKind::Lorentz, Default::default(), |_, _| {});
     let summary = replay.summary("mit-csail.clf", &log);
     assert_eq!(summary.scans, 1988);
     assert!(summary.stats.trusted > 1900, "{summary:?}");

@@ -8,7 +8,7 @@ use robot::Stamp;
 use robot::hardware::{DriveCommand, DriveWait, PanTiltCommand, Ramp, SonarCommand};
 use robot::protocol::line::{BaseLink, LineReader, LinkError, MAX_LINE, PanTiltLink};
 use robot::protocol::sick::{Frame, MAX_LENGTH, MeasuredValues, Telegram, TelegramDecoder};
-use sim::firmware::{BaseFirmware, PanTiltFirmware};
+use sim::devices::firmware::{BaseFirmware, PanTiltFirmware};
 use std::io::{self, Read, Write};
 
 /// The twin's base firmware as a byte stream: what is written reaches its receive interrupt,

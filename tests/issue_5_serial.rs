@@ -1,5 +1,5 @@
 //! Issue 5, the swap: the same scripted tour run directly on `SimRobot` and through
-//! `SerialRobot` → TCP → the twin's serial face (`sim::serve`), and the real backend surviving a
+//! `SerialRobot` → TCP → the twin's serial face (`sim::commands::serve`), and the real backend surviving a
 //! dropped connection and a burst of garbage mid-tour.
 //!
 //! The served twin runs 10× faster than real time, so these tests take a few wall seconds each.
@@ -8,8 +8,8 @@
 use robot::control::{TourEvent, run_tour};
 use robot::serial::{Endpoint, SerialConfig, SerialRobot};
 use robot::{Clock, Pose2};
+use sim::commands::serve::{Offer, ServeOptions, Served, Server, WallClock};
 use sim::config::Scenario;
-use sim::serve::{Offer, ServeOptions, Served, Server, WallClock};
 use sim::{SimRobot, Twin};
 use std::io::{Read, Write};
 use std::net::{Shutdown, TcpListener, TcpStream};

@@ -7,8 +7,8 @@ use robot::Clock;
 use robot::hardware::{Batteries, DriveBase};
 use robot::serial::{Endpoint, SerialConfig, SerialRobot};
 use sim::Twin;
+use sim::commands::serve::{Offer, ServeOptions, Served, Server, WallClock};
 use sim::config::Scenario;
-use sim::serve::{Offer, ServeOptions, Served, Server, WallClock};
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
 use std::sync::Arc;
@@ -286,7 +286,8 @@ fn the_pan_tilt_homes_and_moves_through_the_serial_face_as_on_the_twin() {
         "/../scenarios/tilted-scan.toml"
     ))
     .unwrap();
-    let direct = sim::run::run_scenario(&scenario, &Default::default(), |_, _| {}).unwrap();
+    let direct =
+        sim::commands::run::run_scenario(&scenario, &Default::default(), |_, _| {}).unwrap();
     let twin = Twin::new(
         &scenario.world,
         &scenario.robot,
@@ -309,7 +310,7 @@ fn the_pan_tilt_homes_and_moves_through_the_serial_face_as_on_the_twin() {
     let (stop, handle) = run(server);
     let clock: Arc<dyn Clock> = Arc::new(WallClock::new(20.0));
     let mut robot = SerialRobot::open(config, clock).unwrap();
-    let drive = sim::drive::drive_scenario(&mut robot, &scenario, None, |_, _| {});
+    let drive = sim::commands::drive::drive_scenario(&mut robot, &scenario, None, |_, _| {});
     let events = robot.take_events();
     stop.store(true, Ordering::Relaxed);
     handle.join().unwrap();
@@ -328,7 +329,7 @@ fn the_pan_tilt_homes_and_moves_through_the_serial_face_as_on_the_twin() {
     assert_eq!(drive.scans.len(), direct.scans.len());
     // scans.jsonl places the laser where the head was put, as `twin run` does from the truth.
     let dir = std::env::temp_dir().join(format!("twin-drive-head-{}", std::process::id()));
-    sim::drive::write_drive(&drive, &scenario, Vec::new(), &dir).unwrap();
+    sim::commands::drive::write_drive(&drive, &scenario, Vec::new(), &dir).unwrap();
     let text = std::fs::read_to_string(dir.join("scans.jsonl")).unwrap();
     let first: sim::output::ScanLine = serde_json::from_str(text.lines().next().unwrap()).unwrap();
     let expected = sim::output::ScanLine::of(&direct.scans[0]);

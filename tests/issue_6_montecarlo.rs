@@ -3,8 +3,8 @@
 //! losing a trial. A small study (2 rates × 9 trials, two matchers) keeps these quick; the full
 //! Table 5.1 study is `twin montecarlo studies/table-5-1.toml` (README, benchmark).
 
+use sim::commands::montecarlo::{RunOptions, Shard, StudyError, merge, run_study};
 use sim::config::Study;
-use sim::montecarlo::{RunOptions, Shard, StudyError, merge, run_study};
 use std::path::{Path, PathBuf};
 
 /// The files that must be byte-identical (`timings.csv` holds wall-clock times).

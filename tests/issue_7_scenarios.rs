@@ -8,9 +8,10 @@
 //! below. To accept a deliberate change of a golden run: `UPDATE_GOLDEN=1 cargo test --test
 //! issue_7_scenarios golden`, and commit `tests/golden/`.
 
-use sim::checks::evaluate;
+use sim::commands::check::evaluate;
+use sim::commands::run::{RunOptions, run_scenario};
 use sim::config::Scenario;
-use sim::run::{RunOptions, RunRecord, run_scenario};
+use sim::record::RunRecord;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 

@@ -11,11 +11,11 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use robot::{Pose2, Stamp};
+use sim::config::Outliers;
 use sim::config::{RobotDescription, WorldDescription};
-use sim::laser::outliers::Outliers;
-use sim::laser::{LaserFrame, LaserModel};
-use sim::sonar::SonarModel;
-use sim::world_map::WorldMap;
+use sim::devices::laser::{LaserFrame, LaserModel};
+use sim::devices::sonar::SonarModel;
+use sim::world::WorldMap;
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
 

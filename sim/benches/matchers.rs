@@ -15,9 +15,9 @@ use rand::{RngExt, SeedableRng};
 use robot::Pose2;
 use robot::localization::{MatcherKind, RangeScan};
 use robot::logs::LogEvent;
+use sim::commands::montecarlo::pairs::PairMaker;
+use sim::config::Outliers;
 use sim::config::{RobotDescription, WorldDescription};
-use sim::laser::outliers::Outliers;
-use sim::pairs::PairMaker;
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
 

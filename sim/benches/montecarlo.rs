@@ -7,8 +7,8 @@
 //! `time cargo run --release -- montecarlo studies/table-5-1.toml --threads 2`.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use sim::commands::montecarlo::Trials;
 use sim::config::Study;
-use sim::montecarlo::Trials;
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {

@@ -8,8 +8,8 @@
 //!
 //! `cargo bench --bench realtime`
 
+use sim::commands::run::{RunOptions, run_scenario};
 use sim::config::Scenario;
-use sim::run::{RunOptions, run_scenario};
 use std::path::Path;
 use std::time::Instant;
 

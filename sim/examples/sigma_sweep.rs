@@ -9,9 +9,9 @@ use rand::{RngExt, SeedableRng};
 use robot::Pose2;
 use robot::geometry::wrap_angle;
 use robot::localization::{Lorentz, ScanMatcher};
+use sim::commands::montecarlo::pairs::PairMaker;
+use sim::config::Outliers;
 use sim::config::{RobotDescription, WorldDescription};
-use sim::laser::outliers::Outliers;
-use sim::pairs::PairMaker;
 
 fn main() {
     let pairs: usize = std::env::args()

@@ -3,7 +3,9 @@
 //! A file that cannot be used gives a [`ConfigError`] naming the file, the line, the column and
 //! the field, and saying what was expected.
 
+pub mod checks;
 mod error;
+mod outliers;
 pub mod robot_file;
 pub mod scenario;
 pub mod study;
@@ -11,7 +13,8 @@ pub mod values;
 pub mod world;
 
 pub use error::ConfigError;
+pub use outliers::Outliers;
 pub use robot_file::RobotDescription;
 pub use scenario::{NoiseSettings, Scenario};
 pub use study::Study;
-pub use world::{Material, Wall, WorldDescription};
+pub use world::{Material, Optics, Wall, WorldDescription};

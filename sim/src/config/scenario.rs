@@ -40,12 +40,12 @@
 //! keyframe_angle_deg = 0.0              # (0: to the previous scan, as the thesis does)
 //! ```
 
+use super::checks::{Check, CheckFile, parse_checks};
 use super::error::{ConfigError, Source, resolve};
 use super::robot_file::RobotDescription;
 use super::values::{NonNegative, Positive, RelativeError, UnitInterval};
 use super::world::WorldDescription;
-use crate::checks::{Bounds, Check, CheckKind};
-use crate::laser::outliers::Outliers;
+use crate::config::Outliers;
 use core::time::Duration;
 use robot::control::{Pacing, Step, TourConfig};
 use robot::localization::UnknownMatcher;
@@ -305,175 +305,6 @@ impl Scenario {
             path: source.path.clone(),
         })
     }
-}
-
-/// Validates the `[[check]]` tables: a known kind, and the bounds that kind takes.
-fn parse_checks(
-    files: &[Spanned<CheckFile>],
-    source: &Source,
-    localises: bool,
-    fires_sonar: bool,
-) -> Result<Vec<Check>, ConfigError> {
-    let mut checks = Vec::new();
-    for (i, spanned) in files.iter().enumerate() {
-        let f = spanned.get_ref();
-        let field = |name: &str| Some(format!("check[{i}].{name}"));
-        let error =
-            |name: &str, message: String| source.error(spanned.span(), field(name), message);
-        let kind = match f.kind.as_str() {
-            "final_estimate_error" => CheckKind::FinalEstimateError,
-            "rms_estimate_error" => CheckKind::RmsEstimateError,
-            "odometry_drift" => CheckKind::OdometryDrift,
-            "collisions" => CheckKind::Collisions,
-            "scans" => CheckKind::Scans,
-            "outlier_share" => CheckKind::OutlierShare,
-            "no_return_share" => CheckKind::NoReturnShare,
-            "map_quality" => CheckKind::MapQuality,
-            "distance_travelled" => CheckKind::DistanceTravelled,
-            "sonar_error" => CheckKind::SonarError {
-                transducers: f.transducers.clone().unwrap_or_else(|| vec![0]),
-            },
-            other => {
-                return Err(error(
-                    "kind",
-                    format!(
-                        "unknown check {other:?}: expected one of {}",
-                        CheckKind::NAMES.join(", ")
-                    ),
-                ));
-            }
-        };
-        // Which bounds each kind takes: metres, degrees, counts or shares.
-        let (metres, degrees, counts, shares) = match kind {
-            CheckKind::FinalEstimateError | CheckKind::RmsEstimateError => {
-                (true, true, false, false)
-            }
-            CheckKind::OdometryDrift => (true, true, false, false),
-            CheckKind::SonarError { .. } | CheckKind::DistanceTravelled => {
-                (true, false, false, false)
-            }
-            CheckKind::Collisions | CheckKind::Scans => (false, false, true, false),
-            CheckKind::OutlierShare | CheckKind::NoReturnShare | CheckKind::MapQuality => {
-                (false, false, false, true)
-            }
-        };
-        let given = [
-            (
-                "min_m / max_m",
-                f.min_m.is_some() || f.max_m.is_some(),
-                metres,
-            ),
-            (
-                "min_deg / max_deg",
-                f.min_deg.is_some() || f.max_deg.is_some(),
-                degrees,
-            ),
-            ("min / max", f.min.is_some() || f.max.is_some(), counts),
-            (
-                "min_share / max_share",
-                f.min_share.is_some() || f.max_share.is_some(),
-                shares,
-            ),
-        ];
-        for (name, present, allowed) in given {
-            if present && !allowed {
-                return Err(error(
-                    name.split(' ').next().unwrap_or(name),
-                    format!("a `{}` check takes no {name}", f.kind),
-                ));
-            }
-        }
-        if !given.iter().any(|(_, present, _)| *present) {
-            let takes: Vec<&str> = given
-                .iter()
-                .filter(|(_, _, allowed)| *allowed)
-                .map(|(n, _, _)| *n)
-                .collect();
-            return Err(error(
-                "kind",
-                format!("a `{}` check needs a bound: {}", f.kind, takes.join(" or ")),
-            ));
-        }
-        if f.transducers.is_some() && !matches!(kind, CheckKind::SonarError { .. }) {
-            return Err(error(
-                "transducers",
-                "only a `sonar_error` check names transducers".into(),
-            ));
-        }
-        let needs = match kind {
-            CheckKind::FinalEstimateError | CheckKind::RmsEstimateError | CheckKind::MapQuality
-                if !localises =>
-            {
-                Some("a [localisation] table")
-            }
-            CheckKind::SonarError { .. } if !fires_sonar => {
-                Some("a [sonar] table with fire = true")
-            }
-            _ => None,
-        };
-        if let Some(what) = needs {
-            return Err(error("kind", format!("a `{}` check needs {what}", f.kind)));
-        }
-        let bounds = if counts {
-            Bounds {
-                min: f.min,
-                max: f.max,
-            }
-        } else if shares {
-            Bounds {
-                min: f.min_share,
-                max: f.max_share,
-            }
-        } else {
-            Bounds {
-                min: f.min_m,
-                max: f.max_m,
-            }
-        };
-        let all = [
-            f.min_m,
-            f.max_m,
-            f.min_deg,
-            f.max_deg,
-            f.min,
-            f.max,
-            f.min_share,
-            f.max_share,
-        ];
-        if all.iter().flatten().any(|v| !v.is_finite() || *v < 0.0) {
-            return Err(error(
-                "kind",
-                "bounds must be finite and not negative".into(),
-            ));
-        }
-        checks.push(Check {
-            kind,
-            bounds,
-            degrees: Bounds {
-                min: f.min_deg,
-                max: f.max_deg,
-            },
-            note: f.note.clone().unwrap_or_default(),
-        });
-    }
-    Ok(checks)
-}
-
-/// One `[[check]]` table.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct CheckFile {
-    kind: String,
-    min_m: Option<f64>,
-    max_m: Option<f64>,
-    min_deg: Option<f64>,
-    max_deg: Option<f64>,
-    min: Option<f64>,
-    max: Option<f64>,
-    min_share: Option<f64>,
-    max_share: Option<f64>,
-    transducers: Option<Vec<u8>>,
-    note: Option<String>,
 }
 
 /// Loads the file a scenario names; an unreadable file is reported at the scenario's line.

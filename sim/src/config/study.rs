@@ -27,7 +27,7 @@ use super::robot_file::RobotDescription;
 use super::scenario::{NoiseFile, NoiseSettings, load_named};
 use super::values::{NonNegative, Positive};
 use super::world::WorldDescription;
-use crate::laser::outliers::Outliers;
+use crate::config::Outliers;
 use robot::localization::{MatcherKind, UnknownMatcher};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};

@@ -42,7 +42,6 @@
 
 use super::error::{ConfigError, Source};
 use super::values::{Angle, UnitInterval};
-use crate::laser::beam::Optics;
 use robot::Pose2;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -86,6 +85,42 @@ impl Material {
     /// The material's name in world files.
     pub fn name(self) -> &'static str {
         Self::NAMES[self as usize]
+    }
+}
+
+/// The optical behaviour of the world's materials. Angles are incidence angles from the
+/// surface normal, radians.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Optics {
+    /// Beyond this incidence no surface returns the pulse.
+    pub grazing: f64,
+    /// Black surfaces always return the pulse up to this incidence…
+    pub black_full: f64,
+    /// …and never from this incidence on.
+    pub black_lost: f64,
+    /// Glass returns the pulse itself below this incidence (zero: never, a perfect mirror).
+    pub glass_return: f64,
+    /// Beyond it, the chance that glass lets the pulse through (else it mirrors it).
+    pub glass_transparent: f64,
+    /// Metal returns the pulse itself below this incidence, and mirrors it from there on.
+    pub metal_return: f64,
+    /// Reflections and transmissions followed before the pulse is lost.
+    pub max_bounces: u32,
+}
+
+impl Default for Optics {
+    /// Grazing at 85°, black lost between 20° and 50°, glass returning within 8° and otherwise
+    /// transparent half the time, metal returning within 3°, three bounces.
+    fn default() -> Self {
+        Optics {
+            grazing: 85f64.to_radians(),
+            black_full: 20f64.to_radians(),
+            black_lost: 50f64.to_radians(),
+            glass_return: 8f64.to_radians(),
+            glass_transparent: 0.5,
+            metal_return: 3f64.to_radians(),
+            max_bounces: 3,
+        }
     }
 }
 

@@ -17,12 +17,12 @@ mod tum;
 pub use scans::{ScanLine, write_scan_lines, write_scans};
 pub use sonar::write_sonar;
 pub use summary::{LocalisationSummary, Summary, estimate_errors};
-pub use svg::{PointKind, write_map_svg};
+pub use svg::write_map_svg;
 pub use tilted::{last_tilted, write_tilted_svg};
 pub use tum::write_tum;
 
 use crate::config::Scenario;
-use crate::run::RunRecord;
+use crate::record::RunRecord;
 use std::path::{Path, PathBuf};
 
 /// Where each output file went.

@@ -1,6 +1,6 @@
 //! Scans as JSON Lines, one object per scan, in the shape later tools read.
 
-use crate::run::ScanRecord;
+use crate::record::ScanRecord;
 use robot::Pose2;
 use robot::hardware::LaserScan;
 use serde::Serialize;

@@ -1,6 +1,6 @@
 //! `sonar.json`: one full reading of the sonar ring, with the pose it was taken from.
 
-use crate::run::SonarRecord;
+use crate::record::SonarRecord;
 use robot::hardware::{SPEED_OF_SOUND, echo_distance_m};
 use serde::Serialize;
 use std::path::Path;

@@ -1,6 +1,6 @@
 //! `summary.json`: the figures of a run.
 
-use crate::run::{LocalisationRecord, RunRecord};
+use crate::record::{LocalisationRecord, RunRecord};
 use robot::localization::MatchStats;
 use serde::Serialize;
 use std::path::Path;

@@ -3,8 +3,8 @@
 
 use super::summary::estimate_errors;
 use crate::config::{Material, WorldDescription};
-use crate::run::RunRecord;
-use crate::world_map::WorldMap;
+use crate::record::RunRecord;
+use crate::world::{PointKind, WorldMap};
 use robot::Pose2;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -17,42 +17,12 @@ const MARGIN: f64 = 0.6;
 const MAX_POINTS: usize = 60_000;
 /// Width of one legend column, pixels.
 const LEGEND_COLUMN: f64 = 280.0;
-/// How far from every surface a point must be to count as a ghost, metres.
-const GHOST_MARGIN: f64 = 0.15;
-/// Points lower than this (metres) hit the floor.
-const FLOOR_BAND: f64 = 0.03;
-
-/// What a scan point hit, as the pictures colour it and the checks count it.
-#[derive(Copy, Clone, Debug, PartialEq, Eq)]
-pub enum PointKind {
-    /// A wall or object.
-    Surface,
-    /// The floor (a tilted laser).
-    Floor,
-    /// No surface there: a mirror image or an outlier.
-    Ghost,
-}
-
-impl PointKind {
-    /// What the world point `p` is: farther than 15 cm from every surface is a ghost, lower
-    /// than 3 cm is the floor.
-    pub fn of(map: &WorldMap, p: [f64; 3]) -> Self {
-        if map.distance_3d(p) > GHOST_MARGIN {
-            PointKind::Ghost
-        } else if p[2] < FLOOR_BAND {
-            PointKind::Floor
-        } else {
-            PointKind::Surface
-        }
-    }
-
-    /// Its colour in the pictures.
-    pub(super) const fn colour(self) -> &'static str {
-        match self {
-            PointKind::Surface => "#1f3b73",
-            PointKind::Floor => "#2ca25f",
-            PointKind::Ghost => "#e0115f",
-        }
+/// The colour a point of `kind` is drawn in.
+pub(super) const fn point_colour(kind: PointKind) -> &'static str {
+    match kind {
+        PointKind::Surface => "#1f3b73",
+        PointKind::Floor => "#2ca25f",
+        PointKind::Ghost => "#e0115f",
     }
 }
 
@@ -70,9 +40,12 @@ pub(super) fn wall_colour(material: Material) -> &'static str {
 const LEGEND: [(&str, &str); 6] = [
     ("#1a9850", "true path"),
     ("#d73027", "odometry"),
-    (PointKind::Surface.colour(), "scans placed at the true pose"),
+    (
+        point_colour(PointKind::Surface),
+        "scans placed at the true pose",
+    ),
     ("#f08a24", "scans placed at odometry"),
-    (PointKind::Ghost.colour(), "ghosts: no surface there"),
+    (point_colour(PointKind::Ghost), "ghosts: no surface there"),
     ("#c9c9c9", "walls (blue glass, violet metal)"),
 ];
 /// The legend's entries for the scan-matching estimate, shown when the run localised.
@@ -81,7 +54,7 @@ const ESTIMATE_LEGEND: [(&str, &str); 2] = [
     ("#b07cd8", "scans placed at the estimate"),
 ];
 /// The legend's entry for floor hits, shown when a tilted laser made some.
-const FLOOR_LEGEND: (&str, &str) = (PointKind::Floor.colour(), "floor hits (tilted laser)");
+const FLOOR_LEGEND: (&str, &str) = (point_colour(PointKind::Floor), "floor hits (tilted laser)");
 
 /// Writes the map picture.
 pub fn write_map_svg(
@@ -167,13 +140,13 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
         (dots(&points.drifted), "#f08a24", "scans at odometry"),
         (
             dots(&points.seen),
-            PointKind::Surface.colour(),
+            point_colour(PointKind::Surface),
             "scans at true pose",
         ),
         (dots(&points.floor), FLOOR_LEGEND.0, FLOOR_LEGEND.1),
         (
             dots(&points.ghosts),
-            PointKind::Ghost.colour(),
+            point_colour(PointKind::Ghost),
             "ghosts: no surface there",
         ),
     ] {
@@ -373,7 +346,7 @@ pub(super) fn xml_escape(text: &str) -> String {
 }
 
 /// One wedge per transducer, from the transducer out to its echo; a dashed ray for no echo.
-fn draw_sonar(s: &mut String, f: &Frame, sonar: &crate::run::SonarRecord) {
+fn draw_sonar(s: &mut String, f: &Frame, sonar: &crate::record::SonarRecord) {
     use robot::hardware::{SPEED_OF_SOUND, echo_distance_m};
     let e = &sonar.echoes;
     for (i, &k) in e.sequence.iter().enumerate() {

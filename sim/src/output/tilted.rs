@@ -6,10 +6,10 @@
 //! floor at `h / (cos a · sin t)` — dashed: floor hits lie on the curve, walls and objects in
 //! front of the floor below it. The right panel places the points in the world, with the walls.
 
-use super::svg::{PointKind, path_data, wall_colour, xml_escape};
+use super::svg::{path_data, point_colour, wall_colour, xml_escape};
 use crate::config::WorldDescription;
-use crate::run::{RunRecord, ScanRecord};
-use crate::world_map::WorldMap;
+use crate::record::{RunRecord, ScanRecord};
+use crate::world::{PointKind, WorldMap};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -57,11 +57,11 @@ fn render(r: &ScanRecord, world: &WorldDescription, scenario: &str) -> String {
                 angle,
                 range,
                 xy: [p[0], p[1]],
-                colour: PointKind::of(&map, p).colour(),
+                colour: point_colour(PointKind::of(&map, p)),
             })
         })
         .collect();
-    let floor_colour = PointKind::Floor.colour();
+    let floor_colour = point_colour(PointKind::Floor);
     let floor_hits = points.iter().filter(|p| p.colour == floor_colour).count();
 
     let (min, max) = world.bounds();
@@ -216,7 +216,7 @@ fn render(r: &ScanRecord, world: &WorldDescription, scenario: &str) -> String {
         r.scan.stamp.secs_f64(),
         frame.origin[2],
         frame.tilt.to_degrees(),
-        crate::laser::LaserFrame::mount_on(&frame, r.truth)
+        crate::devices::laser::LaserFrame::mount_on(&frame, r.truth)
             .theta
             .to_degrees(),
     );
@@ -227,9 +227,9 @@ fn render(r: &ScanRecord, world: &WorldDescription, scenario: &str) -> String {
         points.len()
     );
     for (i, (colour, label)) in [
-        (PointKind::Floor.colour(), "floor hits"),
-        (PointKind::Surface.colour(), "walls and objects"),
-        (PointKind::Ghost.colour(), "ghosts: no surface there"),
+        (point_colour(PointKind::Floor), "floor hits"),
+        (point_colour(PointKind::Surface), "walls and objects"),
+        (point_colour(PointKind::Ghost), "ghosts: no surface there"),
     ]
     .iter()
     .enumerate()

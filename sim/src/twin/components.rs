@@ -1,14 +1,14 @@
 //! What the twin's world is made of: resources shared by everything, and the components of a
 //! robot entity.
 
-use crate::battery::Electrics;
-use crate::firmware::{BaseBoard, PanTiltFirmware};
-use crate::laser::{LaserFrame, LaserModel};
-use crate::motor::Motor;
-use crate::pan_tilt::{HeadAngles, PanTiltHead};
+use crate::devices::battery::Electrics;
+use crate::devices::firmware::{BaseBoard, PanTiltFirmware};
+use crate::devices::laser::{LaserFrame, LaserModel};
+use crate::devices::motor::Motor;
+use crate::devices::pan_tilt::{HeadAngles, PanTiltHead};
+use crate::devices::sonar::SonarModel;
 use crate::rng::SimRng;
-use crate::sonar::SonarModel;
-use crate::world_map::WorldMap;
+use crate::world::WorldMap;
 use bevy_ecs::prelude::*;
 use core::time::Duration;
 use rapier2d::prelude::{ColliderHandle, PhysicsWorld, RigidBodyHandle};
@@ -175,7 +175,7 @@ pub struct Sonars {
 #[derive(Component)]
 pub struct PanTiltUnit {
     /// The pan-tilt microcontroller with its serial port.
-    pub board: crate::firmware::Board<PanTiltFirmware>,
+    pub board: crate::devices::firmware::Board<PanTiltFirmware>,
     /// Motors, encoders, switches and the laser's geometry.
     pub head: PanTiltHead,
     /// The head's angles at the end of every step (and at time zero); the head turns at constant

@@ -12,20 +12,21 @@
 //! tick by tick, then the body moves once. See [`systems`] for the order.
 
 pub mod components;
+pub mod sim_robot;
 pub mod systems;
 
 pub use components::{STEP, TICK, TICKS_PER_STEP};
 
-use crate::battery::Electrics;
 use crate::config::{ConfigError, NoiseSettings, RobotDescription, WorldDescription};
-use crate::firmware::{BaseBoard, BaseFirmware, Board as McuBoard, PanTiltFirmware};
-use crate::laser::beam::Disc;
-use crate::laser::{LaserFrame, LaserModel};
-use crate::motor::{Motor, MotorParams};
-use crate::pan_tilt::{HeadAngles, PanTiltHead};
+use crate::devices::battery::Electrics;
+use crate::devices::firmware::{BaseBoard, BaseFirmware, Board as McuBoard, PanTiltFirmware};
+use crate::devices::laser::beam::Disc;
+use crate::devices::laser::{LaserFrame, LaserModel};
+use crate::devices::motor::{Motor, MotorParams};
+use crate::devices::pan_tilt::{HeadAngles, PanTiltHead};
+use crate::devices::sonar::SonarModel;
 use crate::rng;
-use crate::sonar::SonarModel;
-use crate::world_map::WorldMap;
+use crate::world::WorldMap;
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::{LogLevel, ScheduleBuildSettings, SingleThreadedExecutor};
 use components::*;

@@ -67,9 +67,9 @@ pub fn run_drive_electronics(
 /// Answers a shot fired during this tick with its echo, if it comes back within the echo window,
 /// and notes when a reading is stored.
 fn listen_for_echoes(
-    board: &mut crate::firmware::BaseBoard,
+    board: &mut crate::devices::firmware::BaseBoard,
     sonars: &mut Sonars,
-    map: &crate::world_map::WorldMap,
+    map: &crate::world::WorldMap,
     base: robot::Pose2,
     now: robot::Stamp,
 ) {
@@ -227,7 +227,7 @@ pub fn sense_lasers(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::laser::LaserModel;
+    use crate::devices::laser::LaserModel;
     use bevy_ecs::system::RunSystemOnce;
     use robot::Stamp;
     use std::collections::VecDeque;
@@ -236,13 +236,8 @@ mod tests {
     /// the pose interpolated at its exact time and the delivery time of its telegram.
     #[test]
     fn a_scan_due_mid_step_gets_the_interpolated_pose() {
-        let desc = crate::laser::lms_description(0.0);
-        let model = LaserModel::new(
-            &desc,
-            Pose2::IDENTITY,
-            0.0,
-            crate::laser::outliers::Outliers::NONE,
-        );
+        let desc = crate::devices::laser::lms_description(0.0);
+        let model = LaserModel::new(&desc, Pose2::IDENTITY, 0.0, crate::config::Outliers::NONE);
         let timing = model.timing();
         let mut world = World::new();
         world.insert_resource(SimClock {

@@ -1,134 +1,16 @@
-//! Scenario checks: what a run must show, with bounds, evaluated on its record.
+//! Scenario checks evaluated on a run's record, and `twin check`.
 //!
-//! A scenario lists them as `[[check]]` tables (see `scenarios/README.md`); `twin run` evaluates
-//! them after the run and fails with a report naming each check that is out of bounds, and every
-//! scenario under `scenarios/` runs as a test case of `cargo test`.
+//! A scenario lists its checks as `[[check]]` tables ([`crate::config::checks`], and
+//! `scenarios/README.md`); `twin run` evaluates them after the run and fails with a report naming
+//! each check that is out of bounds, and every scenario under `scenarios/` runs as a test case of
+//! `cargo test`.
 
 use crate::config::Scenario;
-use crate::output::PointKind;
-use crate::run::RunRecord;
-use crate::world_map::WorldMap;
+use crate::config::checks::{Check, CheckKind};
+use crate::record::RunRecord;
+use crate::world::PointKind;
+use crate::world::WorldMap;
 use core::fmt;
-
-/// What a check measures.
-#[derive(Clone, Debug, PartialEq)]
-pub enum CheckKind {
-    /// Position (m) and heading (°) error of the scan-matching estimate at the last scan.
-    FinalEstimateError,
-    /// RMS position (m) and heading (°) error of the estimate over all scans.
-    RmsEstimateError,
-    /// Distance (m) and heading difference (°) between the final odometry and the truth: a lower
-    /// bound proves slip is on, an upper bound that the odometry is sane.
-    OdometryDrift,
-    /// Contacts with walls.
-    Collisions,
-    /// Scans kept.
-    Scans,
-    /// Share of returned laser readings farther than 15 cm from every surface (outliers, mirror
-    /// images).
-    OutlierShare,
-    /// Share of laser readings with no return (black surfaces at an angle, glass, open space
-    /// beyond range).
-    NoReturnShare,
-    /// Share of the estimate's map points within 5 cm of a true surface.
-    MapQuality,
-    /// Largest error (m) of the listed sonar transducers' last echoes against the true distance
-    /// along their axes.
-    SonarError {
-        /// Transducer numbers.
-        transducers: Vec<u8>,
-    },
-    /// Length of the true path, metres.
-    DistanceTravelled,
-}
-
-impl CheckKind {
-    /// The names accepted in `kind = "…"`.
-    pub const NAMES: [&'static str; 10] = [
-        "final_estimate_error",
-        "rms_estimate_error",
-        "odometry_drift",
-        "collisions",
-        "scans",
-        "outlier_share",
-        "no_return_share",
-        "map_quality",
-        "sonar_error",
-        "distance_travelled",
-    ];
-
-    /// The name used in files and reports.
-    pub fn name(&self) -> &'static str {
-        match self {
-            CheckKind::FinalEstimateError => "final_estimate_error",
-            CheckKind::RmsEstimateError => "rms_estimate_error",
-            CheckKind::OdometryDrift => "odometry_drift",
-            CheckKind::Collisions => "collisions",
-            CheckKind::Scans => "scans",
-            CheckKind::OutlierShare => "outlier_share",
-            CheckKind::NoReturnShare => "no_return_share",
-            CheckKind::MapQuality => "map_quality",
-            CheckKind::SonarError { .. } => "sonar_error",
-            CheckKind::DistanceTravelled => "distance_travelled",
-        }
-    }
-
-    /// The unit of the main quantity.
-    fn unit(&self) -> &'static str {
-        match self {
-            CheckKind::FinalEstimateError
-            | CheckKind::RmsEstimateError
-            | CheckKind::OdometryDrift
-            | CheckKind::SonarError { .. }
-            | CheckKind::DistanceTravelled => " m",
-            CheckKind::Collisions | CheckKind::Scans => "",
-            CheckKind::OutlierShare | CheckKind::NoReturnShare | CheckKind::MapQuality => "",
-        }
-    }
-}
-
-/// A bound on a quantity: at least `min`, at most `max`.
-#[derive(Copy, Clone, Debug, Default, PartialEq)]
-pub struct Bounds {
-    /// Lower bound.
-    pub min: Option<f64>,
-    /// Upper bound.
-    pub max: Option<f64>,
-}
-
-impl Bounds {
-    fn holds(&self, value: f64) -> bool {
-        self.min.is_none_or(|m| value >= m) && self.max.is_none_or(|m| value <= m)
-    }
-
-    fn is_empty(&self) -> bool {
-        self.min.is_none() && self.max.is_none()
-    }
-}
-
-impl fmt::Display for Bounds {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match (self.min, self.max) {
-            (Some(a), Some(b)) => write!(f, "in [{a}, {b}]"),
-            (Some(a), None) => write!(f, ">= {a}"),
-            (None, Some(b)) => write!(f, "<= {b}"),
-            (None, None) => write!(f, "(no bound)"),
-        }
-    }
-}
-
-/// One check of a scenario.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Check {
-    /// What it measures.
-    pub kind: CheckKind,
-    /// Bounds on the main quantity (metres, a count or a share).
-    pub bounds: Bounds,
-    /// Bounds on the heading part, degrees (estimate errors, odometry drift).
-    pub degrees: Bounds,
-    /// Why the check is there, shown in reports.
-    pub note: String,
-}
 
 /// The outcome of one check.
 #[derive(Clone, Debug, PartialEq)]
@@ -366,4 +248,100 @@ fn evaluate_one(
             single(worst, format!("{worst:.4} m ({})", details.join("; ")))
         }
     }
+}
+
+/// `twin check`: run every scenario of a folder and evaluate its checks; print a table, fail if
+/// any check fails.
+#[derive(Clone, Debug, clap::Args)]
+pub struct CheckArgs {
+    /// The folder (e.g. scenarios/).
+    pub dir: std::path::PathBuf,
+    /// Print only the table and failures.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// Runs `twin check`.
+pub fn main(args: CheckArgs) -> Result<(), super::CommandError> {
+    use super::CommandError;
+    use super::run::{RunOptions, run_scenario};
+    use rayon::prelude::*;
+    use std::path::PathBuf;
+    let dir = args.dir;
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .map_err(|source| CommandError::Folder {
+            dir: dir.clone(),
+            source,
+        })?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file() && p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        return Err(CommandError::NoScenarios(dir));
+    }
+    let bar = super::bar(
+        args.quiet,
+        files.len() as u64,
+        "check [{bar:30}] {pos}/{len} scenarios {elapsed_precise}",
+    );
+    // Per file: its check report and wall seconds, or why it could not run.
+    type Outcome = Result<(CheckReport, f64), String>;
+    let results: Vec<(PathBuf, Outcome)> = files
+        .par_iter()
+        .map(|path| {
+            let started = std::time::Instant::now();
+            let outcome = Scenario::load(path)
+                .map_err(|e| e.to_string())
+                .and_then(|scenario| {
+                    let record = run_scenario(&scenario, &RunOptions::default(), |_, _| {})
+                        .map_err(|e| e.to_string())?;
+                    Ok((
+                        evaluate(&scenario, &record),
+                        started.elapsed().as_secs_f64(),
+                    ))
+                });
+            bar.inc(1);
+            (path.clone(), outcome)
+        })
+        .collect();
+    bar.finish_and_clear();
+    println!("| scenario | checks | passed | failed | seconds |");
+    println!("|---|---|---|---|---|");
+    let mut failed = 0;
+    for (path, result) in &results {
+        let name = path.file_stem().map_or("?".into(), |s| s.to_string_lossy());
+        match result {
+            Ok((report, seconds)) => {
+                let bad = report.failures().count();
+                failed += usize::from(bad > 0);
+                println!(
+                    "| {name} | {} | {} | {bad} | {seconds:.1} |",
+                    report.outcomes.len(),
+                    report.outcomes.len() - bad
+                );
+            }
+            Err(_) => {
+                failed += 1;
+                println!("| {name} | - | - | error | - |");
+            }
+        }
+    }
+    for (path, result) in &results {
+        match result {
+            Ok((report, _)) if !report.passed() => {
+                println!();
+                print!("{report}");
+            }
+            Err(e) => println!("\n{}: {e}", path.display()),
+            _ => {}
+        }
+    }
+    if failed > 0 {
+        return Err(CommandError::ScenariosFailed {
+            failed,
+            total: results.len(),
+        });
+    }
+    Ok(())
 }

@@ -11,7 +11,7 @@
 //! The switches are where homing finds them: the pan's right switch and the tilt's lower switch
 //! are pressed from 0.4 turn below position 0 on, the pan's left switch from 0.6 turn beyond the
 //! firmware's last position (`MAX_ABS_GIRO`). The motors are the same exact DC model as the
-//! drive's ([`crate::motor`]); the pan runs on the 24 V motor pair, the tilt on its 12 V tap. The
+//! drive's ([`crate::devices::motor`]); the pan runs on the 24 V motor pair, the tilt on its 12 V tap. The
 //! head is taken as balanced about the tilt axis (no gravity torque).
 //!
 //! The laser's optical centre sits `laser_forward_m` ahead of and `laser_up_m` above the tilt
@@ -19,10 +19,10 @@
 //! circle about the axis as the head tilts.
 
 use crate::config::robot_file::PanTiltDescription;
-use crate::firmware::PanTiltFirmware;
-use crate::firmware::pan_tilt::MAX_ABS_GIRO;
-use crate::laser::LaserFrame;
-use crate::motor::{Motor, MotorParams};
+use crate::devices::firmware::PanTiltFirmware;
+use crate::devices::firmware::pan_tilt::MAX_ABS_GIRO;
+use crate::devices::laser::LaserFrame;
+use crate::devices::motor::{Motor, MotorParams};
 use robot::Pose2;
 use std::f64::consts::TAU;
 

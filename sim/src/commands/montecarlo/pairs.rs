@@ -1,11 +1,11 @@
 //! Scan pairs with known truth, for testing and measuring the matchers: two scans of the twin's
 //! laser from two base poses, and the true pose of the second laser frame in the first.
 
+use crate::config::Outliers;
 use crate::config::{RobotDescription, WorldDescription};
-use crate::laser::LaserModel;
-use crate::laser::outliers::Outliers;
+use crate::devices::laser::LaserModel;
 use crate::rng::SimRng;
-use crate::world_map::WorldMap;
+use crate::world::WorldMap;
 use rand::RngExt;
 use robot::localization::RangeScan;
 use robot::{Pose2, Stamp};

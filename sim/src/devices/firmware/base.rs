@@ -812,9 +812,9 @@ mod tests {
         fw.receive(b"k5\n");
         assert_eq!((fw.k_vel_ini, fw.k_vel_end, fw.k_ms_inc), (5, 0, 9));
         // '\r' is skipped; a letter folds in as c - '0'.
-        let (cmd, n) = crate::firmware::decode_command(b"a1\r0\n", &mut fw.param);
+        let (cmd, n) = crate::devices::firmware::decode_command(b"a1\r0\n", &mut fw.param);
         assert_eq!((cmd, n, fw.param[0]), (b'a', 1, 10));
-        let (_, _) = crate::firmware::decode_command(b"a1x\n", &mut fw.param);
+        let (_, _) = crate::devices::firmware::decode_command(b"a1x\n", &mut fw.param);
         assert_eq!(fw.param[0], 10 + (u16::from(b'x') - u16::from(b'0')));
     }
 

@@ -193,7 +193,7 @@ pub fn write_drive(
         .as_ref()
         .zip(record.pan_tilt)
         .map(|(desc, status)| {
-            let head = crate::pan_tilt::PanTiltHead::new(desc);
+            let head = crate::devices::pan_tilt::PanTiltHead::new(desc);
             head.laser_frame(Pose2::IDENTITY, head.angles_at(status.pan, status.tilt))
         });
     let (mount, z, tilt) = match head {
@@ -267,4 +267,119 @@ pub fn write_drive(
     text.push('\n');
     std::fs::write(file("summary.json"), text)?;
     Ok(files)
+}
+
+/// `twin drive`: drive a scenario's script on the real robot (or on `twin serve`) through the
+/// serial backend, with the same controller and localisation as `twin run`; write the odometry
+/// and estimate trajectories, the scans, a map picture and a summary.
+#[derive(Clone, Debug, clap::Args)]
+pub struct DriveArgs {
+    /// The scenario file: its script, robot description, pacing and matcher (its world is
+    /// only used for the start pose).
+    pub script: PathBuf,
+    /// The base microcontroller: a serial device (/dev/ttyUSB0) or tcp:HOST:PORT.
+    #[arg(long)]
+    pub base: robot::serial::Endpoint,
+    /// The pan-tilt microcontroller, if the scenario positions the head.
+    #[arg(long = "pantilt")]
+    pub pan_tilt: Option<robot::serial::Endpoint>,
+    /// The laser.
+    #[arg(long)]
+    pub laser: robot::serial::Endpoint,
+    /// The matcher: ls, lorentz, lorentz-lines or mbicp [default: the scenario's, if any].
+    #[arg(long)]
+    pub matcher: Option<MatcherKind>,
+    /// Output folder [default: out/drive-SCENARIO-NAME].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// How much faster than real time the devices run (the --speed of `twin serve`; 1 on the
+    /// real robot).
+    #[arg(long, default_value_t = 1.0)]
+    pub time_scale: f64,
+    /// Print nothing but errors.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// Runs `twin drive`.
+pub fn main(args: DriveArgs) -> Result<(), super::CommandError> {
+    use super::CommandError;
+    use robot::serial::{SerialConfig, SerialRobot};
+    if !(args.time_scale > 0.0 && args.time_scale <= 1000.0) {
+        return Err(CommandError::option(
+            "--time-scale",
+            "must be above 0 and at most 1000",
+            args.time_scale,
+        ));
+    }
+    let scenario = Scenario::load(&args.script)?;
+    let mut config = SerialConfig::new(args.base);
+    config.pan_tilt = args.pan_tilt;
+    config.laser = Some(args.laser);
+    config.base_baud = scenario.robot.drive.serial_baud;
+    if let Some(pt) = &scenario.robot.pan_tilt {
+        config.pan_tilt_baud = pt.serial_baud;
+    }
+    config.laser_baud = scenario.robot.laser.baud;
+    config.laser_sweep = std::time::Duration::from_secs_f64(scenario.robot.laser.sweep_s.get());
+    config.laser_range_max_mm = (scenario.robot.laser.range_max_m.get() * 1000.0).round() as u16;
+    let clock: std::sync::Arc<dyn robot::Clock> =
+        std::sync::Arc::new(super::serve::WallClock::new(args.time_scale));
+    let mut robot = SerialRobot::open(config, clock).map_err(CommandError::Open)?;
+    let bar = super::step_bar(args.quiet, scenario.steps.len());
+    bar.set_prefix(format!("drive {}", scenario.name));
+    let result = drive_scenario(&mut robot, &scenario, args.matcher, |done, _| {
+        bar.set_position(done as u64)
+    });
+    bar.finish_and_clear();
+    let events: Vec<String> = robot
+        .take_events()
+        .iter()
+        .map(ToString::to_string)
+        .collect();
+    if !args.quiet {
+        for e in &events {
+            eprintln!("{e}");
+        }
+    }
+    let record = result?;
+    let dir = args
+        .out
+        .unwrap_or_else(|| PathBuf::from("out").join(format!("drive-{}", scenario.name)));
+    let files = write_drive(&record, &scenario, events.clone(), &dir).map_err(|source| {
+        CommandError::Write {
+            dir: dir.clone(),
+            source,
+        }
+    })?;
+    if !args.quiet {
+        let p = record.final_odometry;
+        println!(
+            "{}: {} steps, {} scans in {:.1} s; final odometry ({:.3} m, {:.3} m, {:.2} deg); {} link event(s)",
+            record.scenario,
+            record.steps,
+            record.scans.len(),
+            record.wall_seconds,
+            p.x,
+            p.y,
+            p.theta.to_degrees(),
+            events.len()
+        );
+        if let Some((kind, placed, _)) = &record.localisation
+            && let Some(last) = placed.last()
+        {
+            let e = last.estimate;
+            println!(
+                "estimate ({kind}): ({:.3} m, {:.3} m, {:.2} deg)",
+                e.x,
+                e.y,
+                e.theta.to_degrees()
+            );
+        }
+        println!("wrote {}", dir.display());
+        for f in &files {
+            println!("  {}", f.display());
+        }
+    }
+    Ok(())
 }

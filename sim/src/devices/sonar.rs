@@ -13,7 +13,7 @@
 
 use crate::config::robot_file::SonarDescription;
 use crate::rng::SimRng;
-use crate::world_map::WorldMap;
+use crate::world::WorldMap;
 use rand_distr::{Distribution, StandardNormal};
 use robot::Pose2;
 

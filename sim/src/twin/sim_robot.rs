@@ -19,7 +19,7 @@
 //! Ground truth is not part of the contract: it is offered by the sim-only [`GroundTruth`] trait.
 
 use crate::config::{ConfigError, Scenario};
-use crate::laser::LaserFrame;
+use crate::devices::laser::LaserFrame;
 use crate::twin::{TICK, Twin};
 use core::time::Duration;
 use robot::hardware::{

@@ -3,131 +3,15 @@
 
 use crate::config::scenario::SonarSettings;
 use crate::config::{ConfigError, Scenario};
-use crate::laser::LaserFrame;
-use crate::sim_robot::{GroundTruth, SimError, SimRobot};
+use crate::record::{LocalisationRecord, RunRecord, ScanRecord, SonarRecord};
+use crate::twin::sim_robot::{GroundTruth, SimError, SimRobot};
 use robot::control::{TourConfig, TourError, TourEvent, run_tour};
 use robot::hardware::{
-    DriveBase, DriveWait, LaserScan, PanTilt, PanTiltPosition, PanTiltStatus, SonarCommand,
-    SonarRing,
+    DriveBase, DriveWait, PanTilt, PanTiltPosition, PanTiltStatus, SonarCommand, SonarRing,
 };
-use robot::localization::{MapBuilder, MapConfig, MatcherKind, Placed, RangeScan};
-use robot::{Pose2, Stamp};
+use robot::localization::{MapBuilder, MapConfig, RangeScan};
+
 use std::time::Instant;
-
-/// One scan as recorded by a run.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ScanRecord {
-    /// The scan as the robot received it.
-    pub scan: LaserScan,
-    /// The robot's odometry at the scan's stamp (world frame: it starts at the start pose).
-    pub odometry: Pose2,
-    /// The true pose of the base at the scan's stamp.
-    pub truth: Pose2,
-    /// The laser's true frame at the scan's stamp (on the pan-tilt: panned and tilted).
-    pub frame: LaserFrame,
-}
-
-/// One full reading of the sonar ring, taken at rest at the end of a run.
-#[derive(Clone, Debug, PartialEq)]
-pub struct SonarRecord {
-    /// The report as the robot received it.
-    pub echoes: robot::hardware::SonarEchoes,
-    /// The true pose of the base when it was read.
-    pub truth: Pose2,
-    /// Each transducer's pose on the base, by transducer number.
-    pub transducers: Vec<Pose2>,
-    /// Full width of a transducer's cone, radians.
-    pub cone: f64,
-}
-
-/// Everything a run produced.
-#[derive(Clone, Debug)]
-pub struct RunRecord {
-    /// The scenario's name.
-    pub scenario: String,
-    /// The seed used.
-    pub seed: u64,
-    /// Kept scans, in order.
-    pub scans: Vec<ScanRecord>,
-    /// Steps of the script carried out.
-    pub steps: usize,
-    /// Simulated time at the end.
-    pub end: Stamp,
-    /// Wall-clock seconds the run took.
-    pub wall_seconds: f64,
-    /// Length of the true path, metres.
-    pub distance_m: f64,
-    /// Contacts with walls.
-    pub collisions: u32,
-    /// The true pose at the end.
-    pub final_truth: Pose2,
-    /// The odometry at the end.
-    pub final_odometry: Pose2,
-    /// The true path, one pose per world step.
-    pub true_path: Vec<(Stamp, Pose2)>,
-    /// State of charge of the (logic, motor) batteries at the end.
-    pub battery_charge: (f64, f64),
-    /// The sonar ring's last reading, when the scenario fires it.
-    pub sonar: Option<SonarRecord>,
-    /// The pan-tilt's status once it reached the scenario's position, before the script.
-    pub pan_tilt: Option<PanTiltStatus>,
-    /// The scan-matching estimate, when the scenario localises.
-    pub localisation: Option<LocalisationRecord>,
-}
-
-/// What the localisation made of a run's scans.
-#[derive(Clone, Debug)]
-pub struct LocalisationRecord {
-    /// The matcher used.
-    pub matcher: MatcherKind,
-    /// One placed scan per kept scan, in the same order (world frame: it starts at the start
-    /// pose).
-    pub placed: Vec<Placed>,
-    /// The point map, world frame.
-    pub map: Vec<[f64; 2]>,
-    /// Wall-clock seconds spent localising.
-    pub wall_seconds: f64,
-}
-
-impl LocalisationRecord {
-    /// Position and heading errors of the estimate against the truth at each scan.
-    pub fn errors<'a>(&'a self, scans: &'a [ScanRecord]) -> impl Iterator<Item = (f64, f64)> + 'a {
-        self.placed.iter().zip(scans).map(|(p, s)| {
-            (
-                p.estimate.distance(&s.truth),
-                robot::geometry::wrap_angle(p.estimate.theta - s.truth.theta).abs(),
-            )
-        })
-    }
-}
-
-impl RunRecord {
-    /// Simulated seconds.
-    pub fn sim_seconds(&self) -> f64 {
-        self.end.secs_f64()
-    }
-
-    /// Simulated seconds per wall-clock second.
-    pub fn real_time_factor(&self) -> f64 {
-        if self.wall_seconds > 0.0 {
-            self.sim_seconds() / self.wall_seconds
-        } else {
-            f64::INFINITY
-        }
-    }
-
-    /// Distance between the final odometry and the final true pose, metres.
-    pub fn final_odometry_error_m(&self) -> f64 {
-        self.final_odometry.distance(&self.final_truth)
-    }
-
-    /// Heading difference between the final odometry and the final true pose, degrees.
-    pub fn final_odometry_error_deg(&self) -> f64 {
-        robot::geometry::wrap_angle(self.final_odometry.theta - self.final_truth.theta)
-            .to_degrees()
-            .abs()
-    }
-}
 
 /// Why a run failed.
 #[derive(Debug, thiserror::Error)]
@@ -334,4 +218,86 @@ fn hardware_error(step: &str, source: SimError) -> TourError<SimError> {
         step: step.into(),
         source,
     }
+}
+
+/// `twin run`: run a scenario headless, as fast as possible, and write trajectories, scans, a
+/// summary and a map picture; evaluate its checks and fail if one is out of bounds.
+#[derive(Clone, Debug, clap::Args)]
+pub struct RunArgs {
+    /// The scenario file (e.g. scenarios/lab-tour.toml).
+    pub scenario: std::path::PathBuf,
+    /// Output folder [default: out/SCENARIO-NAME].
+    #[arg(long)]
+    pub out: Option<std::path::PathBuf>,
+    /// Seed replacing the scenario's.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Print nothing but errors.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// Runs `twin run`.
+pub fn main(args: RunArgs) -> Result<(), super::CommandError> {
+    use super::CommandError;
+    let scenario = Scenario::load(&args.scenario)?;
+    let bar = super::step_bar(args.quiet, scenario.steps.len());
+    bar.set_prefix(scenario.name.clone());
+    let options = RunOptions {
+        seed: args.seed,
+        ..RunOptions::default()
+    };
+    let record = run_scenario(&scenario, &options, |done, _| bar.set_position(done as u64))?;
+    bar.finish_and_clear();
+    let dir = args
+        .out
+        .unwrap_or_else(|| std::path::PathBuf::from("out").join(&scenario.name));
+    let written = crate::output::write_all(&record, &scenario, &dir).map_err(|source| {
+        CommandError::Write {
+            dir: dir.clone(),
+            source,
+        }
+    })?;
+    if !args.quiet {
+        println!(
+            "{}: {:.1} s simulated in {:.3} s ({:.0}x real time), {} scans, {:.2} m driven",
+            record.scenario,
+            record.sim_seconds(),
+            record.wall_seconds,
+            record.real_time_factor(),
+            record.scans.len(),
+            record.distance_m
+        );
+        println!(
+            "final odometry error {:.3} m, {:.2} deg; {} collision(s); seed {}",
+            record.final_odometry_error_m(),
+            record.final_odometry_error_deg(),
+            record.collisions,
+            record.seed
+        );
+        if let Some(loc) = &record.localisation {
+            let (final_m, final_deg, rms_m, rms_deg) = crate::output::estimate_errors(&record, loc);
+            println!(
+                "estimate ({}): final error {final_m:.3} m, {final_deg:.2} deg; RMS {rms_m:.3} m, {rms_deg:.2} deg",
+                loc.matcher
+            );
+        }
+        println!("wrote {}", written.dir.display());
+        for f in &written.files {
+            println!("  {}", f.display());
+        }
+    }
+    let report = super::check::evaluate(&scenario, &record);
+    if !report.outcomes.is_empty() && (!args.quiet || !report.passed()) {
+        print!("{report}");
+    }
+    let failed = report.failures().count();
+    if failed > 0 {
+        return Err(CommandError::ChecksFailed {
+            path: args.scenario,
+            failed,
+            total: report.outcomes.len(),
+        });
+    }
+    Ok(())
 }

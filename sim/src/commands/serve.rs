@@ -20,7 +20,7 @@
 //! has one peer, and a client that reconnects after a network fault must not be locked out), and
 //! starts with an empty line: it does not inherit its predecessor's unfinished bytes.
 
-use crate::firmware::{Board, MainLoop};
+use crate::devices::firmware::{Board, MainLoop};
 use crate::twin::Twin;
 use core::fmt;
 use core::str::FromStr;
@@ -109,7 +109,7 @@ impl FromStr for Offer {
     type Err = OfferError;
 
     /// ```
-    /// use sim::serve::Offer;
+    /// use sim::commands::serve::Offer;
     /// assert_eq!("pty".parse(), Ok(Offer::Pty));
     /// assert_eq!("tcp:127.0.0.1:0".parse(), Ok(Offer::Tcp("127.0.0.1:0".into())));
     /// assert!("127.0.0.1:4001".parse::<Offer>().is_err());
@@ -810,4 +810,106 @@ mod tests {
         assert_eq!(variant.data[0], 0, "only 180° at 0.5° is offered");
         assert_eq!(lms.handle(&Telegram::request(0x66, vec![])), vec![NAK]);
     }
+}
+
+/// `twin serve`: run the twin in (scaled) real time and offer its devices byte for byte, as the
+/// robot's serial ports would: the base and pan-tilt firmware and the SICK LMS's telegrams, on
+/// TCP ports or pseudo-terminals. Runs until killed (or for --duration).
+#[derive(Clone, Debug, clap::Args)]
+pub struct ServeArgs {
+    /// The scenario file: its world, robot, noise and seed (its script is not run).
+    pub scenario: std::path::PathBuf,
+    /// Where to offer the base microcontroller: tcp:HOST:PORT (port 0: any free) or pty.
+    #[arg(long)]
+    pub base: Offer,
+    /// Where to offer the pan-tilt microcontroller (robots with a pan-tilt).
+    #[arg(long = "pantilt")]
+    pub pan_tilt: Option<Offer>,
+    /// Where to offer the laser.
+    #[arg(long)]
+    pub laser: Option<Offer>,
+    /// Simulated seconds per wall-clock second.
+    #[arg(long, default_value_t = 1.0)]
+    pub speed: f64,
+    /// Stop after this many simulated seconds.
+    #[arg(long)]
+    pub duration: Option<f64>,
+    /// Seed replacing the scenario's.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Print only the addresses and errors.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// Runs `twin serve`.
+pub fn main(args: ServeArgs) -> Result<(), super::CommandError> {
+    use super::CommandError;
+
+    if !(args.speed > 0.0 && args.speed <= 1000.0) {
+        return Err(CommandError::option(
+            "--speed",
+            "must be above 0 and at most 1000",
+            args.speed,
+        ));
+    }
+    let duration = match args.duration {
+        Some(d) if d > 0.0 && d.is_finite() => Some(Duration::from_secs_f64(d)),
+        Some(d) => {
+            return Err(CommandError::option(
+                "--duration",
+                "must be a positive number of seconds",
+                d,
+            ));
+        }
+        None => None,
+    };
+    let scenario = crate::config::Scenario::load(&args.scenario)?;
+    let twin = Twin::new(
+        &scenario.world,
+        &scenario.robot,
+        &scenario.noise,
+        args.seed.unwrap_or(scenario.seed),
+    )?;
+    let options = ServeOptions {
+        speed: args.speed,
+        base: args.base,
+        pan_tilt: args.pan_tilt,
+        laser: args.laser,
+    };
+    let mut server = Server::new(twin, &options)?;
+    println!(
+        "serving {} ({}) at {}x real time",
+        scenario.name, scenario.robot.name, options.speed
+    );
+    for (device, address) in server.addresses() {
+        println!("{device:<9} {address}");
+    }
+    std::io::stdout()
+        .flush()
+        .map_err(|source| CommandError::Io {
+            what: "writing stdout",
+            source,
+        })?;
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let quiet = args.quiet;
+    server.run(&stop, duration, |t, line| {
+        if !quiet {
+            eprintln!("[{t}] {line}");
+        }
+    });
+    if !quiet {
+        for (device, stats) in server.stats() {
+            println!(
+                "{device}: {} connection(s), {} bytes in ({} dropped), {} messages, {} bytes out ({} lost)",
+                stats.connections,
+                stats.bytes_in,
+                stats.bytes_dropped_in,
+                stats.messages_in,
+                stats.bytes_out,
+                stats.bytes_dropped_out
+            );
+        }
+    }
+    Ok(())
 }

@@ -21,16 +21,17 @@
 //! byte-identical whatever the threads, shards or interruptions; the wall-clock time of each match
 //! goes to `timings.csv` beside them, which naturally differs from run to run.
 
+pub mod pairs;
 mod report;
 
 pub use report::{CellStats, Summary, write_reports};
 
+use crate::commands::montecarlo::pairs::PairMaker;
+use crate::config::Outliers;
 use crate::config::Study;
-use crate::laser::outliers::Outliers;
-use crate::pairs::PairMaker;
 use crate::rng::{self, SimRng};
-use crate::sim_robot::{GroundTruth, SimError, SimRobot};
 use crate::twin::Twin;
+use crate::twin::sim_robot::{GroundTruth, SimError, SimRobot};
 use rand::RngExt;
 use rayon::prelude::*;
 use robot::Pose2;
@@ -145,7 +146,7 @@ impl std::str::FromStr for Shard {
     type Err = String;
 
     /// ```
-    /// use sim::montecarlo::Shard;
+    /// use sim::commands::montecarlo::Shard;
     /// assert_eq!("2/8".parse(), Ok(Shard { index: 2, count: 8 }));
     /// assert!("8/8".parse::<Shard>().is_err());
     /// ```
@@ -816,4 +817,119 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(Summary, Vec<PathBuf>), St
 /// Where a study's outputs go by default.
 pub fn default_dir(study: &Study) -> PathBuf {
     PathBuf::from("out").join(format!("montecarlo-{}", study.name))
+}
+
+/// `twin montecarlo`: run a Monte Carlo study of the scan matchers (the thesis's Table 5.1 by
+/// default): every matcher on the same twin scan pairs at each outlier rate; resumable,
+/// shardable, and bit-identical whatever the thread count. `twin montecarlo merge DIR... --out
+/// DIR` combines shards.
+#[derive(Clone, Debug, clap::Args)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+pub struct MontecarloArgs {
+    #[command(subcommand)]
+    merge: Option<MontecarloCommand>,
+    /// The study file (e.g. studies/table-5-1.toml).
+    #[arg(required = true)]
+    study: Option<PathBuf>,
+    /// Output folder [default: out/montecarlo-STUDY-NAME]; started again with the same folder,
+    /// the run finishes the missing trials.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Worker threads (0: all cores).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    /// Run only the trials i with i mod N = K (K counts from 0).
+    #[arg(long, default_value = "0/1")]
+    shard: Shard,
+    /// Run at most this many trials now and stop (run again to go on).
+    #[arg(long)]
+    max_trials: Option<u64>,
+    /// Print nothing but errors.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+#[derive(Clone, Debug, clap::Subcommand)]
+enum MontecarloCommand {
+    /// Combine finished shard folders into the files a single run would have written.
+    Merge {
+        /// The shard folders, one per shard.
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+        /// Where to write the merged results.
+        #[arg(long)]
+        out: PathBuf,
+        /// Print nothing but errors.
+        #[arg(long, short)]
+        quiet: bool,
+    },
+}
+
+/// Runs `twin montecarlo` (or its `merge`).
+pub fn main(args: MontecarloArgs) -> Result<(), super::CommandError> {
+    if let Some(MontecarloCommand::Merge { dirs, out, quiet }) = args.merge {
+        let (summary, files) = merge(&dirs, &out)?;
+        if !quiet {
+            print!("{}", summary.table());
+            println!("merged {} shard folders into {}", dirs.len(), out.display());
+            for f in &files {
+                println!("  {}", f.display());
+            }
+        }
+        return Ok(());
+    }
+    let path = args
+        .study
+        .expect("clap requires the study without a subcommand");
+    let study = Study::load(&path)?;
+    let dir = args.out.unwrap_or_else(|| default_dir(&study));
+    let bar = super::bar(
+        args.quiet,
+        0,
+        "{prefix} [{bar:30}] {pos}/{len} trials {per_sec} ETA {eta}",
+    );
+    bar.set_prefix(format!("{} (shard {})", study.name, args.shard));
+    let options = RunOptions {
+        threads: args.threads,
+        shard: args.shard,
+        max_trials: args.max_trials,
+    };
+    let report = run_study(&study, &dir, &options, |done, total| {
+        bar.set_length(total);
+        bar.set_position(done);
+    })?;
+    bar.finish_and_clear();
+    if args.quiet {
+        return Ok(());
+    }
+    if report.resumed > 0 {
+        println!(
+            "resumed: {} trials were already done in {}",
+            report.resumed,
+            dir.display()
+        );
+    }
+    let rate = report.ran as f64 / report.wall_seconds.max(1e-9);
+    println!(
+        "{} trials run in {:.1} s ({rate:.0} trials/s, {} matchers each)",
+        report.ran,
+        report.wall_seconds,
+        study.matchers.len()
+    );
+    match &report.summary {
+        Some(summary) => {
+            print!("{}", summary.table());
+            println!("wrote {}", dir.display());
+            for f in &report.files {
+                println!("  {}", f.display());
+            }
+        }
+        None => println!(
+            "{} of {} trials of shard {} done; run the same command again to go on",
+            report.resumed + report.ran,
+            report.owned,
+            args.shard
+        ),
+    }
+    Ok(())
 }

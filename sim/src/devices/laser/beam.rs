@@ -18,49 +18,13 @@
 //! A pulse that has been reflected or transmitted `max_bounces` times, or has travelled the
 //! laser's maximum range, is lost.
 
-use crate::config::Material;
+use crate::config::{Material, Optics};
 use crate::rng::SimRng;
-use crate::world_map::WorldMap;
+use crate::world::WorldMap;
 use parry2d::math::{Pose, Vector};
 use parry2d::query::{Ray, RayCast};
 use parry2d::shape::Ball;
 use rand::RngExt;
-
-/// The optical behaviour of the world's materials. Angles are incidence angles from the
-/// surface normal, radians.
-#[derive(Copy, Clone, Debug, PartialEq)]
-pub struct Optics {
-    /// Beyond this incidence no surface returns the pulse.
-    pub grazing: f64,
-    /// Black surfaces always return the pulse up to this incidence…
-    pub black_full: f64,
-    /// …and never from this incidence on.
-    pub black_lost: f64,
-    /// Glass returns the pulse itself below this incidence (zero: never, a perfect mirror).
-    pub glass_return: f64,
-    /// Beyond it, the chance that glass lets the pulse through (else it mirrors it).
-    pub glass_transparent: f64,
-    /// Metal returns the pulse itself below this incidence, and mirrors it from there on.
-    pub metal_return: f64,
-    /// Reflections and transmissions followed before the pulse is lost.
-    pub max_bounces: u32,
-}
-
-impl Default for Optics {
-    /// Grazing at 85°, black lost between 20° and 50°, glass returning within 8° and otherwise
-    /// transparent half the time, metal returning within 3°, three bounces.
-    fn default() -> Self {
-        Optics {
-            grazing: 85f64.to_radians(),
-            black_full: 20f64.to_radians(),
-            black_lost: 50f64.to_radians(),
-            glass_return: 8f64.to_radians(),
-            glass_transparent: 0.5,
-            metal_return: 3f64.to_radians(),
-            max_bounces: 3,
-        }
-    }
-}
 
 impl Optics {
     /// The thresholds as cosines of the incidence, computed once for many pulses.

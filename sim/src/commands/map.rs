@@ -223,3 +223,119 @@ pub fn match_line(line: &str, matcher: &dyn ScanMatcher) -> String {
 fn error_line(message: &str) -> String {
     serde_json::json!({ "error": message }).to_string()
 }
+
+/// `twin map`: build a 2D map from a recorded log (CARMEN .clf, .script, RobotLogger .log) by
+/// chaining scan matches seeded by its odometry; write the estimate, the odometry, a picture of
+/// both maps and a summary with timings.
+#[derive(Clone, Debug, clap::Args)]
+pub struct MapArgs {
+    /// The log file.
+    pub log: PathBuf,
+    /// The matcher: ls, lorentz, lorentz-lines or mbicp.
+    #[arg(long, default_value = "lorentz")]
+    pub matcher: MatcherKind,
+    /// Output folder [default: out/map-LOGNAME].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Match each scan to the last one the robot moved this far from, metres (0: to the
+    /// previous scan).
+    #[arg(long, default_value_t = 0.0)]
+    pub keyframe_m: f64,
+    /// Print nothing but errors.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// Runs `twin map`.
+pub fn map_main(args: MapArgs) -> Result<(), super::CommandError> {
+    use super::CommandError;
+    if !(args.keyframe_m >= 0.0 && args.keyframe_m.is_finite()) {
+        return Err(CommandError::option(
+            "--keyframe-m",
+            "must be a distance >= 0",
+            args.keyframe_m,
+        ));
+    }
+    let log = robot::logs::read_log(&args.log)?;
+    let name = args.log.display().to_string();
+    let bar = super::bar(
+        args.quiet,
+        log.events.len() as u64,
+        "{prefix} [{bar:30}] {pos}/{len} records ETA {eta}",
+    );
+    bar.set_prefix(format!("map ({})", args.matcher));
+    let config = MapConfig {
+        keyframe_distance_m: args.keyframe_m,
+        ..MapConfig::default()
+    };
+    let replay = replay_log(&log, args.matcher, config, |done, _| {
+        bar.set_position(done as u64)
+    });
+    bar.finish_and_clear();
+    let summary = replay.summary(&name, &log);
+    let stem = args
+        .log
+        .file_stem()
+        .map_or("log".into(), |s| s.to_string_lossy());
+    let dir = args
+        .out
+        .unwrap_or_else(|| PathBuf::from("out").join(format!("map-{stem}")));
+    let files = replay
+        .write(&dir, &summary)
+        .map_err(|source| CommandError::Write {
+            dir: dir.clone(),
+            source,
+        })?;
+    if !args.quiet {
+        println!(
+            "{name}: {} scans matched with {} in {:.2} s ({:.2} ms per scan, {:.1} iterations per match); {} lines skipped",
+            summary.scans,
+            args.matcher,
+            summary.wall_seconds,
+            summary.ms_per_scan,
+            summary.stats.mean_iterations,
+            log.skipped_lines()
+        );
+        println!(
+            "map sharpness: {} cells of 5 cm occupied by the estimate's map, {} by odometry's",
+            summary.estimate_cells, summary.odometry_cells
+        );
+        println!("wrote {}", dir.display());
+        for f in &files {
+            println!("  {}", f.display());
+        }
+    }
+    Ok(())
+}
+
+/// `twin match`: match scan pairs read as JSON Lines from stdin, one result line per pair on
+/// stdout.
+///
+/// Input: {"ref": {"angle_min", "angle_increment", "range_max", "ranges": [...]}, "cur": {...},
+/// "guess": [x, y, theta]}; output: {"x", "y", "theta", "iterations", "converged",
+/// "correspondences", "micros"}, or {"error": "..."} for a malformed line.
+#[derive(Clone, Debug, clap::Args)]
+pub struct MatchArgs {
+    /// The matcher: ls, lorentz, lorentz-lines or mbicp.
+    #[arg(long, default_value = "lorentz")]
+    pub matcher: MatcherKind,
+}
+
+/// Runs `twin match` on standard input and output.
+pub fn match_main(args: MatchArgs) -> Result<(), super::CommandError> {
+    use super::CommandError;
+    use std::io::{BufRead, Write};
+    let matcher = args.matcher.build();
+    let stdin = std::io::stdin();
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    let io = |what| move |source| CommandError::Io { what, source };
+    for line in stdin.lock().lines() {
+        let line = line.map_err(io("reading stdin"))?;
+        if line.trim().is_empty() {
+            continue;
+        }
+        writeln!(out, "{}", match_line(&line, matcher.as_ref())).map_err(io("writing stdout"))?;
+        out.flush().map_err(io("writing stdout"))?;
+    }
+    Ok(())
+}

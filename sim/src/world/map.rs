@@ -11,8 +11,7 @@
 //! horizontal ray never needs more: the level laser and the sonar cost what a 2D cast does. A
 //! tilted ray is also tested against the horizontal faces, the floor and the ceiling.
 
-use crate::config::{Material, WorldDescription};
-use crate::laser::beam::Optics;
+use crate::config::{Material, Optics, WorldDescription};
 use parry2d::bounding_volume::BoundingVolume;
 use parry2d::math::Vector;
 use parry2d::partitioning::{Bvh, BvhBuildStrategy};
@@ -66,6 +65,36 @@ pub struct Cap {
     pub z: f64,
     /// Material.
     pub material: Material,
+}
+
+/// How far from every surface a point must be to count as a ghost, metres.
+const GHOST_MARGIN: f64 = 0.15;
+/// Points lower than this (metres) hit the floor.
+const FLOOR_BAND: f64 = 0.03;
+
+/// What a scan point hit, as the pictures colour it and the checks count it.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum PointKind {
+    /// A wall or object.
+    Surface,
+    /// The floor (a tilted laser).
+    Floor,
+    /// No surface there: a mirror image or an outlier.
+    Ghost,
+}
+
+impl PointKind {
+    /// What the world point `p` is: farther than 15 cm from every surface is a ghost, lower
+    /// than 3 cm is the floor.
+    pub fn of(map: &WorldMap, p: [f64; 3]) -> Self {
+        if map.distance_3d(p) > GHOST_MARGIN {
+            PointKind::Ghost
+        } else if p[2] < FLOOR_BAND {
+            PointKind::Floor
+        } else {
+            PointKind::Surface
+        }
+    }
 }
 
 /// Tolerance on heights when deciding whether a ray passes a face, metres.

@@ -5,7 +5,7 @@
 //! 1. [`beam::trace`] follows the pulse through the world: what it meets, by which material, and
 //!    whether it comes back (black surfaces, glass windows and mirrors, metal, grazing loss);
 //! 2. Gaussian range noise is added to a pulse that came back, kept inside the valid range;
-//! 3. [`outliers::Outliers`] may replace the reading by a random one.
+//! 3. [`crate::config::Outliers`] (drawn in [`outliers`]) may replace the reading by a random one.
 //!
 //! A reading with nothing coming back within range is the maximum (32 m).
 //!
@@ -20,12 +20,12 @@
 pub mod beam;
 pub mod outliers;
 
+use crate::config::Outliers;
 use crate::config::robot_file::LaserDescription;
 use crate::rng::SimRng;
-use crate::world_map::WorldMap;
+use crate::world::WorldMap;
 use beam::{Disc, Echo};
 use core::time::Duration;
-use outliers::Outliers;
 use rand_distr::{Distribution, StandardNormal};
 use robot::hardware::LaserScan;
 use robot::{Pose2, Stamp};

@@ -14,7 +14,7 @@
 //! and no-load current (which sets the friction torque).
 
 use crate::config::robot_file::MotorDescription;
-use crate::firmware::HBridge;
+use crate::devices::firmware::HBridge;
 use std::f64::consts::PI;
 
 /// Electrical and mechanical constants of one motor with its load, SI units at the rotor.

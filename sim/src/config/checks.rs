@@ -1,0 +1,296 @@
+//! Scenario checks as a scenario file writes them: `[[check]]` tables naming what a run must
+//! show and the bounds it must stay within. [`crate::commands::check`] evaluates them on a run.
+
+use super::error::{ConfigError, Source};
+use core::fmt;
+use serde::Deserialize;
+use toml::Spanned;
+
+/// What a check measures.
+#[derive(Clone, Debug, PartialEq)]
+pub enum CheckKind {
+    /// Position (m) and heading (°) error of the scan-matching estimate at the last scan.
+    FinalEstimateError,
+    /// RMS position (m) and heading (°) error of the estimate over all scans.
+    RmsEstimateError,
+    /// Distance (m) and heading difference (°) between the final odometry and the truth: a lower
+    /// bound proves slip is on, an upper bound that the odometry is sane.
+    OdometryDrift,
+    /// Contacts with walls.
+    Collisions,
+    /// Scans kept.
+    Scans,
+    /// Share of returned laser readings farther than 15 cm from every surface (outliers, mirror
+    /// images).
+    OutlierShare,
+    /// Share of laser readings with no return (black surfaces at an angle, glass, open space
+    /// beyond range).
+    NoReturnShare,
+    /// Share of the estimate's map points within 5 cm of a true surface.
+    MapQuality,
+    /// Largest error (m) of the listed sonar transducers' last echoes against the true distance
+    /// along their axes.
+    SonarError {
+        /// Transducer numbers.
+        transducers: Vec<u8>,
+    },
+    /// Length of the true path, metres.
+    DistanceTravelled,
+}
+
+impl CheckKind {
+    /// The names accepted in `kind = "…"`.
+    pub const NAMES: [&'static str; 10] = [
+        "final_estimate_error",
+        "rms_estimate_error",
+        "odometry_drift",
+        "collisions",
+        "scans",
+        "outlier_share",
+        "no_return_share",
+        "map_quality",
+        "sonar_error",
+        "distance_travelled",
+    ];
+
+    /// The name used in files and reports.
+    pub fn name(&self) -> &'static str {
+        match self {
+            CheckKind::FinalEstimateError => "final_estimate_error",
+            CheckKind::RmsEstimateError => "rms_estimate_error",
+            CheckKind::OdometryDrift => "odometry_drift",
+            CheckKind::Collisions => "collisions",
+            CheckKind::Scans => "scans",
+            CheckKind::OutlierShare => "outlier_share",
+            CheckKind::NoReturnShare => "no_return_share",
+            CheckKind::MapQuality => "map_quality",
+            CheckKind::SonarError { .. } => "sonar_error",
+            CheckKind::DistanceTravelled => "distance_travelled",
+        }
+    }
+
+    /// The unit of the main quantity.
+    pub(crate) fn unit(&self) -> &'static str {
+        match self {
+            CheckKind::FinalEstimateError
+            | CheckKind::RmsEstimateError
+            | CheckKind::OdometryDrift
+            | CheckKind::SonarError { .. }
+            | CheckKind::DistanceTravelled => " m",
+            CheckKind::Collisions | CheckKind::Scans => "",
+            CheckKind::OutlierShare | CheckKind::NoReturnShare | CheckKind::MapQuality => "",
+        }
+    }
+}
+
+/// A bound on a quantity: at least `min`, at most `max`.
+#[derive(Copy, Clone, Debug, Default, PartialEq)]
+pub struct Bounds {
+    /// Lower bound.
+    pub min: Option<f64>,
+    /// Upper bound.
+    pub max: Option<f64>,
+}
+
+impl Bounds {
+    pub(crate) fn holds(&self, value: f64) -> bool {
+        self.min.is_none_or(|m| value >= m) && self.max.is_none_or(|m| value <= m)
+    }
+
+    pub(crate) fn is_empty(&self) -> bool {
+        self.min.is_none() && self.max.is_none()
+    }
+}
+
+impl fmt::Display for Bounds {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match (self.min, self.max) {
+            (Some(a), Some(b)) => write!(f, "in [{a}, {b}]"),
+            (Some(a), None) => write!(f, ">= {a}"),
+            (None, Some(b)) => write!(f, "<= {b}"),
+            (None, None) => write!(f, "(no bound)"),
+        }
+    }
+}
+
+/// One check of a scenario.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Check {
+    /// What it measures.
+    pub kind: CheckKind,
+    /// Bounds on the main quantity (metres, a count or a share).
+    pub bounds: Bounds,
+    /// Bounds on the heading part, degrees (estimate errors, odometry drift).
+    pub degrees: Bounds,
+    /// Why the check is there, shown in reports.
+    pub note: String,
+}
+
+/// Validates the `[[check]]` tables: a known kind, and the bounds that kind takes.
+pub(super) fn parse_checks(
+    files: &[Spanned<CheckFile>],
+    source: &Source,
+    localises: bool,
+    fires_sonar: bool,
+) -> Result<Vec<Check>, ConfigError> {
+    let mut checks = Vec::new();
+    for (i, spanned) in files.iter().enumerate() {
+        let f = spanned.get_ref();
+        let field = |name: &str| Some(format!("check[{i}].{name}"));
+        let error =
+            |name: &str, message: String| source.error(spanned.span(), field(name), message);
+        let kind = match f.kind.as_str() {
+            "final_estimate_error" => CheckKind::FinalEstimateError,
+            "rms_estimate_error" => CheckKind::RmsEstimateError,
+            "odometry_drift" => CheckKind::OdometryDrift,
+            "collisions" => CheckKind::Collisions,
+            "scans" => CheckKind::Scans,
+            "outlier_share" => CheckKind::OutlierShare,
+            "no_return_share" => CheckKind::NoReturnShare,
+            "map_quality" => CheckKind::MapQuality,
+            "distance_travelled" => CheckKind::DistanceTravelled,
+            "sonar_error" => CheckKind::SonarError {
+                transducers: f.transducers.clone().unwrap_or_else(|| vec![0]),
+            },
+            other => {
+                return Err(error(
+                    "kind",
+                    format!(
+                        "unknown check {other:?}: expected one of {}",
+                        CheckKind::NAMES.join(", ")
+                    ),
+                ));
+            }
+        };
+        // Which bounds each kind takes: metres, degrees, counts or shares.
+        let (metres, degrees, counts, shares) = match kind {
+            CheckKind::FinalEstimateError | CheckKind::RmsEstimateError => {
+                (true, true, false, false)
+            }
+            CheckKind::OdometryDrift => (true, true, false, false),
+            CheckKind::SonarError { .. } | CheckKind::DistanceTravelled => {
+                (true, false, false, false)
+            }
+            CheckKind::Collisions | CheckKind::Scans => (false, false, true, false),
+            CheckKind::OutlierShare | CheckKind::NoReturnShare | CheckKind::MapQuality => {
+                (false, false, false, true)
+            }
+        };
+        let given = [
+            (
+                "min_m / max_m",
+                f.min_m.is_some() || f.max_m.is_some(),
+                metres,
+            ),
+            (
+                "min_deg / max_deg",
+                f.min_deg.is_some() || f.max_deg.is_some(),
+                degrees,
+            ),
+            ("min / max", f.min.is_some() || f.max.is_some(), counts),
+            (
+                "min_share / max_share",
+                f.min_share.is_some() || f.max_share.is_some(),
+                shares,
+            ),
+        ];
+        for (name, present, allowed) in given {
+            if present && !allowed {
+                return Err(error(
+                    name.split(' ').next().unwrap_or(name),
+                    format!("a `{}` check takes no {name}", f.kind),
+                ));
+            }
+        }
+        if !given.iter().any(|(_, present, _)| *present) {
+            let takes: Vec<&str> = given
+                .iter()
+                .filter(|(_, _, allowed)| *allowed)
+                .map(|(n, _, _)| *n)
+                .collect();
+            return Err(error(
+                "kind",
+                format!("a `{}` check needs a bound: {}", f.kind, takes.join(" or ")),
+            ));
+        }
+        if f.transducers.is_some() && !matches!(kind, CheckKind::SonarError { .. }) {
+            return Err(error(
+                "transducers",
+                "only a `sonar_error` check names transducers".into(),
+            ));
+        }
+        let needs = match kind {
+            CheckKind::FinalEstimateError | CheckKind::RmsEstimateError | CheckKind::MapQuality
+                if !localises =>
+            {
+                Some("a [localisation] table")
+            }
+            CheckKind::SonarError { .. } if !fires_sonar => {
+                Some("a [sonar] table with fire = true")
+            }
+            _ => None,
+        };
+        if let Some(what) = needs {
+            return Err(error("kind", format!("a `{}` check needs {what}", f.kind)));
+        }
+        let bounds = if counts {
+            Bounds {
+                min: f.min,
+                max: f.max,
+            }
+        } else if shares {
+            Bounds {
+                min: f.min_share,
+                max: f.max_share,
+            }
+        } else {
+            Bounds {
+                min: f.min_m,
+                max: f.max_m,
+            }
+        };
+        let all = [
+            f.min_m,
+            f.max_m,
+            f.min_deg,
+            f.max_deg,
+            f.min,
+            f.max,
+            f.min_share,
+            f.max_share,
+        ];
+        if all.iter().flatten().any(|v| !v.is_finite() || *v < 0.0) {
+            return Err(error(
+                "kind",
+                "bounds must be finite and not negative".into(),
+            ));
+        }
+        checks.push(Check {
+            kind,
+            bounds,
+            degrees: Bounds {
+                min: f.min_deg,
+                max: f.max_deg,
+            },
+            note: f.note.clone().unwrap_or_default(),
+        });
+    }
+    Ok(checks)
+}
+
+/// One `[[check]]` table.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct CheckFile {
+    kind: String,
+    min_m: Option<f64>,
+    max_m: Option<f64>,
+    min_deg: Option<f64>,
+    max_deg: Option<f64>,
+    min: Option<f64>,
+    max: Option<f64>,
+    min_share: Option<f64>,
+    max_share: Option<f64>,
+    transducers: Option<Vec<u8>>,
+    note: Option<String>,
+}
