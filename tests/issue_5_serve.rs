@@ -303,10 +303,7 @@ fn the_pan_tilt_homes_and_moves_through_the_serial_face_as_on_the_twin() {
     };
     let server = Server::new(twin, &options).unwrap();
     let at = |i: usize| server.addresses()[i].1.parse::<Endpoint>().unwrap();
-    let mut config = SerialConfig::new(at(0));
-    config.pan_tilt = Some(at(1));
-    config.laser = Some(at(2));
-    config.laser_baud = scenario.robot.laser.baud;
+    let config = sim::commands::drive::serial_config(&scenario, at(0), Some(at(1)), Some(at(2)));
     let (stop, handle) = run(server);
     let clock: Arc<dyn Clock> = Arc::new(WallClock::new(20.0));
     let mut robot = SerialRobot::open(config, clock).unwrap();
@@ -332,14 +329,17 @@ fn the_pan_tilt_homes_and_moves_through_the_serial_face_as_on_the_twin() {
     sim::commands::drive::write_drive(&drive, &scenario, Vec::new(), &dir).unwrap();
     let text = std::fs::read_to_string(dir.join("scans.jsonl")).unwrap();
     let first: sim::output::ScanLine = serde_json::from_str(text.lines().next().unwrap()).unwrap();
-    let expected = sim::output::ScanLine::of(&direct.scans[0]);
+    let expected = sim::output::ScanLine::of(&direct.scans[0], &scenario.robot.mount());
+    let (tilt, z) = (first.laser_tilt.unwrap(), first.laser_z.unwrap());
     assert!(
-        (first.laser_tilt - expected.laser_tilt).abs() < 0.01,
+        (tilt - expected.laser_tilt.unwrap()).abs() < 0.01,
         "{first:?}"
     );
-    assert!((first.laser_z - expected.laser_z).abs() < 0.005);
+    assert!((z - expected.laser_z.unwrap()).abs() < 0.005);
     assert!(
-        (first.laser_tilt.to_degrees() + 13.65).abs() < 0.5,
+        (tilt.to_degrees() + 13.65).abs() < 0.5,
         "tilted 13.65° down"
     );
+    // Every scan of the drive knows where the head was, from the pan-tilt's reports.
+    assert!(drive.scans.iter().all(|(s, _, _)| s.head.is_some()));
 }

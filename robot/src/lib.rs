@@ -7,6 +7,7 @@
 //!   batteries — as small fallible traits, plus the shared types (`DriveStatus`, `LaserScan`, …).
 //! - [`protocol`]: the bytes on the wire of the base microcontroller (thesis App. A), encoded and
 //!   parsed exactly as the firmware writes them.
+//! - [`mount`]: where the laser sits on the base, fixed or on the pan-tilt head (Eq. 4.1).
 //! - [`odometry`]: dead reckoning from the firmware's wheel counters, and a FIFO that interpolates
 //!   odometry to a scan's timestamp.
 //! - [`control`]: what the robot does — scripted tours of firmware motions.
@@ -29,6 +30,7 @@ pub mod geometry;
 pub mod hardware;
 pub mod localization;
 pub mod logs;
+pub mod mount;
 pub mod odometry;
 pub mod protocol;
 pub mod serial;

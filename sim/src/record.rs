@@ -3,6 +3,7 @@
 //! [`crate::output`] and the checks of [`crate::commands::check`] are computed from it.
 
 use crate::devices::laser::LaserFrame;
+use robot::control::SceneTag;
 use robot::hardware::{LaserScan, PanTiltStatus};
 use robot::localization::{MatcherKind, Placed};
 use robot::{Pose2, Stamp};
@@ -18,6 +19,8 @@ pub struct ScanRecord {
     pub truth: Pose2,
     /// The laser's true frame at the scan's stamp (on the pan-tilt: panned and tilted).
     pub frame: LaserFrame,
+    /// The 3D scene the scan belongs to, if a `scene` or `survey` step took it.
+    pub scene: Option<SceneTag>,
 }
 
 /// One full reading of the sonar ring, taken at rest at the end of a run.
@@ -73,8 +76,8 @@ pub struct RunRecord {
 pub struct LocalisationRecord {
     /// The matcher used.
     pub matcher: MatcherKind,
-    /// One placed scan per kept scan, in the same order (world frame: it starts at the start
-    /// pose).
+    /// One placed scan per level scan, in order (world frame: it starts at the start pose);
+    /// tilted scans are left to the 3D reconstruction.
     pub placed: Vec<Placed>,
     /// The point map, world frame.
     pub map: Vec<[f64; 2]>,
@@ -85,11 +88,14 @@ pub struct LocalisationRecord {
 impl LocalisationRecord {
     /// Position and heading errors of the estimate against the truth at each scan.
     pub fn errors<'a>(&'a self, scans: &'a [ScanRecord]) -> impl Iterator<Item = (f64, f64)> + 'a {
-        self.placed.iter().zip(scans).map(|(p, s)| {
-            (
+        self.placed.iter().filter_map(|p| {
+            let s = &scans[scans
+                .binary_search_by_key(&p.stamp, |s| s.scan.stamp)
+                .ok()?];
+            Some((
                 p.estimate.distance(&s.truth),
                 robot::geometry::wrap_angle(p.estimate.theta - s.truth.theta).abs(),
-            )
+            ))
         })
     }
 }

@@ -4,4 +4,4 @@ pub mod script;
 pub mod tour;
 
 pub use script::{Step, StepError};
-pub use tour::{Pacing, TourConfig, TourError, TourEvent, TourReport, run_tour};
+pub use tour::{Pacing, SceneTag, TourConfig, TourError, TourEvent, TourReport, run_tour};

@@ -50,14 +50,38 @@ pub enum Step {
         /// Positions between scans, at least 1.
         step: u8,
     },
+    /// A 3D scene (thesis §4.3, §5.3.1): one scan at rest at every tilt position from `from` to
+    /// `to` at one pan, after a level scan of the station for the 2D localisation; the head then
+    /// returns where it was (`scene PAN [FROM TO]`, default tilts 0 to 99: the thesis's 100
+    /// scans).
+    Scene {
+        /// Pan position, 0..=254.
+        pan: u8,
+        /// First tilt position.
+        from: u8,
+        /// Last tilt position.
+        to: u8,
+    },
+    /// Four scenes at four pans (thesis §5.3.2: 90° apart cover 360° around the robot), after
+    /// one level scan of the station (`survey [P1 P2 P3 P4]`, default 0 64 127 191: 90° apart on
+    /// a head of 254 positions per turn).
+    Survey {
+        /// The four pan positions.
+        pans: [u8; 4],
+    },
 }
+
+/// The tilts of a scene when the step does not say: the thesis's 100 positions.
+pub const SCENE_TILTS: (u8, u8) = (0, 99);
+/// The pans of a survey when the step does not say: 90° apart on 254 positions per turn.
+pub const SURVEY_PANS: [u8; 4] = [0, 64, 127, 191];
 
 /// A step that cannot be parsed or carried out.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum StepError {
     /// The text is not a step.
     #[error(
-        "{0}; a step is a firmware command (a535, i78, k5 30 50, v130 130, p, w1000) or move METRES, turn DEGREES, pause SECONDS"
+        "{0}; a step is a firmware command (a535, i78, k5 30 50, v130 130, p, w1000) or move METRES, turn DEGREES, pause SECONDS, head PAN TILT, sweep PAN FROM TO STEP, scene PAN [FROM TO], survey [P1 P2 P3 P4]"
     )]
     Command(#[from] CommandTextError),
     /// A number of an SI step is missing or not finite.
@@ -100,13 +124,20 @@ impl Step {
                     C::TurnRight(tenths)
                 }))
             }
-            Step::Pause { .. } | Step::Head { .. } | Step::Sweep { .. } => None,
+            Step::Pause { .. }
+            | Step::Head { .. }
+            | Step::Sweep { .. }
+            | Step::Scene { .. }
+            | Step::Survey { .. } => None,
         })
     }
 
     /// Whether the step drives the pan-tilt head.
     pub fn uses_head(&self) -> bool {
-        matches!(self, Step::Head { .. } | Step::Sweep { .. })
+        matches!(
+            self,
+            Step::Head { .. } | Step::Sweep { .. } | Step::Scene { .. } | Step::Survey { .. }
+        )
     }
 
     /// The tilt positions of a sweep, in order.
@@ -165,6 +196,59 @@ impl FromStr for Step {
                     });
                 }
                 Ok(Step::Pause { seconds })
+            }
+            "scene" | "survey" => {
+                let (unit, counts): (&'static str, &[usize]) = if keyword == "scene" {
+                    (
+                        "PAN [FROM TO]: positions, pan 0..=254, tilts 0..=100",
+                        &[1, 3],
+                    )
+                } else {
+                    ("[P1 P2 P3 P4]: four pan positions 0..=254", &[0, 4])
+                };
+                let bad = || StepError::Number {
+                    keyword: if keyword == "scene" {
+                        "scene"
+                    } else {
+                        "survey"
+                    },
+                    unit,
+                    text: rest.trim().to_string(),
+                };
+                let values: Vec<u8> = rest
+                    .split_whitespace()
+                    .map(|v| v.parse::<u8>().map_err(|_| bad()))
+                    .collect::<Result<_, _>>()?;
+                if !counts.contains(&values.len()) {
+                    return Err(bad());
+                }
+                if keyword == "survey" {
+                    let pans = match values.as_slice() {
+                        [] => SURVEY_PANS,
+                        [a, b, c, d] => [*a, *b, *c, *d],
+                        _ => return Err(bad()),
+                    };
+                    if pans.iter().any(|&p| p > crate::hardware::PAN_MAX) {
+                        return Err(bad());
+                    }
+                    return Ok(Step::Survey { pans });
+                }
+                let (from, to) = match values.as_slice() {
+                    [_, from, to] => (*from, *to),
+                    _ => SCENE_TILTS,
+                };
+                if values[0] > crate::hardware::PAN_MAX
+                    || from > crate::hardware::TILT_MAX
+                    || to > crate::hardware::TILT_MAX
+                    || from == to
+                {
+                    return Err(bad());
+                }
+                Ok(Step::Scene {
+                    pan: values[0],
+                    from,
+                    to,
+                })
             }
             "head" | "sweep" => {
                 let (unit, count) = if keyword == "head" {
@@ -232,6 +316,20 @@ impl fmt::Display for Step {
                 to,
                 step,
             } => write!(f, "sweep {pan} {from} {to} {step}"),
+            Step::Scene { pan, from, to } => {
+                if (*from, *to) == SCENE_TILTS {
+                    write!(f, "scene {pan}")
+                } else {
+                    write!(f, "scene {pan} {from} {to}")
+                }
+            }
+            Step::Survey { pans } => {
+                if *pans == SURVEY_PANS {
+                    write!(f, "survey")
+                } else {
+                    write!(f, "survey {} {} {} {}", pans[0], pans[1], pans[2], pans[3])
+                }
+            }
         }
     }
 }
@@ -274,6 +372,44 @@ mod tests {
             "head 10",
             "sweep 1 2 3 0",
             "sweep 1 2 3",
+        ] {
+            assert!(bad.parse::<Step>().is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn scene_steps_parse_print_and_refuse_bad_positions() {
+        assert_eq!(
+            "scene 64".parse::<Step>().unwrap(),
+            Step::Scene {
+                pan: 64,
+                from: 0,
+                to: 99
+            }
+        );
+        assert_eq!(
+            "survey".parse::<Step>().unwrap(),
+            Step::Survey { pans: SURVEY_PANS }
+        );
+        for text in [
+            "scene 64",
+            "scene 10 100 20",
+            "survey",
+            "survey 0 60 120 180",
+        ] {
+            let step: Step = text.parse().unwrap();
+            assert_eq!(step.to_string(), text);
+            assert!(step.uses_head());
+            assert_eq!(step.to_line(&G).unwrap(), None);
+        }
+        for bad in [
+            "scene",
+            "scene 255",
+            "scene 1 2",
+            "scene 1 5 5",
+            "scene 1 0 101",
+            "survey 1 2 3",
+            "survey 0 0 0 300",
         ] {
             assert!(bad.parse::<Step>().is_err(), "{bad}");
         }

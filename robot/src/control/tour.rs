@@ -18,11 +18,12 @@
 //!   counts per tick the 8-bit encoder accumulators saturate meanwhile and counts are lost, so the
 //!   robot overshoots and the odometry falls short. Use it with a slow ramp (`k5 12 50`).
 
-use crate::control::script::{Step, StepError};
+use crate::control::script::{SCENE_TILTS, Step, StepError};
 use crate::drive_geometry::DriveGeometry;
 use crate::geometry::Pose2;
 use crate::hardware::{
-    DriveBase, DriveStatus, DriveWait, HardwareError, Laser, LaserScan, PanTilt, PanTiltPosition,
+    DriveBase, DriveCommand, DriveStatus, DriveWait, HardwareError, Laser, LaserScan, PAN_MAX,
+    PanTilt, PanTiltPosition, TILT_MAX,
 };
 use crate::odometry::{Odometer, PoseHistory};
 use crate::protocol::base::DriveLine;
@@ -89,7 +90,18 @@ pub enum TourEvent<'a> {
         scan: &'a LaserScan,
         /// Odometry at `scan.stamp`, in the tour's starting frame.
         odometry: Pose2,
+        /// The 3D scene the scan belongs to, if a `scene` or `survey` step took it.
+        scene: Option<SceneTag>,
     },
+}
+
+/// Which 3D scene a scan belongs to, and where it was taken.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+pub struct SceneTag {
+    /// The scene's number in the tour, from 0.
+    pub scene: usize,
+    /// The station's number, from 0: scenes taken without the base moving in between share it.
+    pub station: usize,
 }
 
 /// Why a tour stopped.
@@ -136,6 +148,8 @@ pub struct TourReport {
     pub steps: usize,
     /// Scans handed to the observer.
     pub scans: usize,
+    /// 3D scenes taken.
+    pub scenes: usize,
     /// The odometry pose at the end.
     pub final_odometry: Pose2,
     /// The stamp of the last status report.
@@ -163,6 +177,9 @@ where
         pending: VecDeque::new(),
         last_status: None,
         scans: 0,
+        scenes: 0,
+        station: None,
+        stations: 0,
     };
     for (index, step) in steps.iter().enumerate() {
         observer(TourEvent::StepStarted {
@@ -178,6 +195,7 @@ where
     Ok(TourReport {
         steps: steps.len(),
         scans: tour.scans,
+        scenes: tour.scenes,
         final_odometry: tour.odometer.pose(),
         end: tour.last_status.map_or(Stamp::ZERO, |s| s.stamp),
     })
@@ -222,6 +240,12 @@ struct Tour {
     pending: VecDeque<LaserScan>,
     last_status: Option<DriveStatus>,
     scans: usize,
+    /// Scenes taken so far.
+    scenes: usize,
+    /// The station of the last scene, while the base has not moved since.
+    station: Option<usize>,
+    /// Stations so far.
+    stations: usize,
 }
 
 impl Tour {
@@ -244,6 +268,10 @@ impl Tour {
                 }
                 robot.drive(command).map_err(Failure::Hardware)?;
                 self.odometer.commanded(&command);
+                if motion || matches!(command, DriveCommand::WheelSpeeds { .. }) {
+                    // The base moves: the next scene is taken at a new station.
+                    self.station = None;
+                }
                 if motion {
                     match self.config.pacing {
                         Pacing::StopAndGo { settle } => {
@@ -274,19 +302,78 @@ impl Tour {
                     to,
                     step,
                 } => {
-                    let settle = match self.config.pacing {
-                        Pacing::StopAndGo { settle } => settle,
-                        Pacing::Polling { .. } => Duration::from_millis(100),
-                    };
+                    let settle = self.settle();
                     for tilt in Step::sweep_tilts(from, to, step) {
                         let stopped = self.move_head(robot, PanTiltPosition { pan, tilt })?;
-                        self.scan_at_rest(robot, stopped, settle, observer)?;
+                        self.scan_at_rest(robot, stopped, settle, None, observer)?;
                     }
+                }
+                Step::Scene { pan, from, to } => {
+                    self.scenes_at(robot, &[pan], (from, to), observer)?;
+                }
+                Step::Survey { pans } => {
+                    self.scenes_at(robot, &pans, SCENE_TILTS, observer)?;
                 }
                 _ => unreachable!("only pauses and head steps send no drive line"),
             },
         }
         Ok(())
+    }
+
+    /// A level scan of the station, then one scene per pan, each a scan at rest at every tilt
+    /// from `tilts.0` to `tilts.1`; the head then goes back where it was.
+    fn scenes_at<R, F>(
+        &mut self,
+        robot: &mut R,
+        pans: &[u8],
+        tilts: (u8, u8),
+        observer: &mut F,
+    ) -> Result<(), Failure<R::Error>>
+    where
+        R: DriveBase + Laser + PanTilt,
+        F: FnMut(TourEvent<'_>),
+    {
+        let settle = self.settle();
+        let before = robot.pan_tilt_status().map_err(Failure::Hardware)?;
+        // The station scan, with the head as it was (level, for the 2D localisation).
+        self.scan_at_rest(robot, before.stamp, settle, None, observer)?;
+        let station = match self.station {
+            Some(s) => s,
+            None => {
+                let next = self.stations;
+                self.stations += 1;
+                self.station = Some(next);
+                next
+            }
+        };
+        for &pan in pans {
+            let tag = SceneTag {
+                scene: self.scenes,
+                station,
+            };
+            self.scenes += 1;
+            for tilt in Step::sweep_tilts(tilts.0, tilts.1, 1) {
+                let stopped = self.move_head(robot, PanTiltPosition { pan, tilt })?;
+                self.scan_at_rest(robot, stopped, settle, Some(tag), observer)?;
+            }
+        }
+        let clamp = |v: i16, max: u8| v.clamp(0, i16::from(max)) as u8;
+        self.move_head(
+            robot,
+            PanTiltPosition {
+                pan: clamp(before.pan, PAN_MAX),
+                tilt: clamp(before.tilt, TILT_MAX),
+            },
+        )?;
+        Ok(())
+    }
+
+    /// How long after a stop a scan is taken at rest.
+    fn settle(&self) -> Duration {
+        match self.config.pacing {
+            Pacing::StopAndGo { settle } => settle,
+            Pacing::Polling { .. } => Duration::from_millis(100),
+        }
     }
 
     /// Moves the head and waits until both its motors are off; returns when they were seen off.
@@ -316,6 +403,7 @@ impl Tour {
         robot: &mut R,
         stopped: Stamp,
         settle: Duration,
+        scene: Option<SceneTag>,
         observer: &mut F,
     ) -> Result<(), Failure<R::Error>>
     where
@@ -331,6 +419,7 @@ impl Tour {
         observer(TourEvent::Scan {
             scan: &scan,
             odometry: self.odometer.pose(),
+            scene,
         });
         Ok(())
     }
@@ -368,7 +457,7 @@ impl Tour {
             }
         };
         // Scans measured during the motion are of no use without odometry: skip them.
-        self.scan_at_rest(robot, stopped.stamp, settle, observer)
+        self.scan_at_rest(robot, stopped.stamp, settle, None, observer)
     }
 
     /// Reads scans and polls the base until both drive motors are off.
@@ -447,6 +536,7 @@ impl Tour {
             observer(TourEvent::Scan {
                 scan: &scan,
                 odometry,
+                scene: None,
             });
         }
     }

@@ -1,5 +1,6 @@
 //! One laser scan as the SICK LMS reports it in millimetre mode.
 
+use super::HeadAngles;
 use crate::time::Stamp;
 
 /// One scan: ranges in millimetres, beam `i` at angle `angle_min + i · angle_increment` in the
@@ -28,6 +29,9 @@ pub struct LaserScan {
     pub range_max_mm: u16,
     /// One reading per beam, millimetres.
     pub ranges_mm: Vec<u16>,
+    /// Where the pan-tilt head pointed the laser when the scan was measured; `None` for a laser
+    /// on a fixed mount, or when the backend could not tell (the head was moving unobserved).
+    pub head: Option<HeadAngles>,
 }
 
 impl LaserScan {
@@ -44,6 +48,7 @@ impl LaserScan {
             angle_increment: std::f64::consts::PI / 360.0,
             range_max_mm: Self::SICK_RANGE_MAX_MM,
             ranges_mm,
+            head: None,
         }
     }
 

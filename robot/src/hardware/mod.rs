@@ -30,8 +30,8 @@ pub use drive::{
 };
 pub use laser::LaserScan;
 pub use pan_tilt::{
-    PAN_MAX, PAN_TILT_SPEED_LIMIT, PanTiltCommand, PanTiltPosition, PanTiltStatus, PanTiltWait,
-    TILT_MAX,
+    HeadAngles, PAN_MAX, PAN_TILT_SPEED_LIMIT, PanTiltCommand, PanTiltPosition, PanTiltStatus,
+    PanTiltWait, TILT_MAX,
 };
 pub use sonar::{
     SONAR_COUNT, SONAR_NO_ECHO, SONAR_TIME_UNIT_S, SPEED_OF_SOUND, SonarCommand, SonarEchoes,

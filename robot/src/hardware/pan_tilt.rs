@@ -74,6 +74,28 @@ impl PanTiltPosition {
     }
 }
 
+/// Where the pan-tilt head points: pan counter-clockwise from the base's forward axis, tilt of the
+/// laser's scan plane up from level (positive: the forward beams rise), radians.
+///
+/// A [`LaserScan`](super::LaserScan) carries the angles at which it was measured; turn them into
+/// the laser's pose on the base with [`LaserMount`](crate::mount::LaserMount).
+#[derive(Copy, Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct HeadAngles {
+    /// Pan, radians counter-clockwise.
+    pub pan: f64,
+    /// Tilt, radians up.
+    pub tilt: f64,
+}
+
+impl crate::odometry::Interpolate for HeadAngles {
+    fn interpolate(&self, other: &HeadAngles, s: f64) -> HeadAngles {
+        HeadAngles {
+            pan: self.pan + (other.pan - self.pan) * s,
+            tilt: self.tilt + (other.tilt - self.tilt) * s,
+        }
+    }
+}
+
 /// One command of the pan-tilt microcontroller that answers with its letter at once.
 ///
 /// There is no stop: the firmware's `do_command` has no `p` (the prose's table lists one, the

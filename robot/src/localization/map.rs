@@ -85,6 +85,8 @@ impl MatchStats {
 struct Key {
     reference: Reference,
     estimate: Pose2,
+    /// The reference scan's laser pose on the base.
+    mount: Pose2,
 }
 
 /// Chains scan matches into a trajectory and a point map.
@@ -113,7 +115,8 @@ pub struct MapBuilder {
     matcher: Box<dyn ScanMatcher>,
     config: MapConfig,
     odometry: PoseHistory,
-    pending: VecDeque<(Stamp, ScanPoints)>,
+    /// Scans waiting for odometry: stamp, points, and the laser's pose on the base.
+    pending: VecDeque<(Stamp, ScanPoints, Pose2)>,
     key: Option<Key>,
     odometry_frame: bool,
     placed: Vec<Placed>,
@@ -157,14 +160,26 @@ impl MapBuilder {
         self.place_ready(false);
     }
 
-    /// A scan. It is placed as soon as the odometry reaches its stamp.
+    /// A scan taken by the laser at the configured mount. It is placed as soon as the odometry
+    /// reaches its stamp.
     pub fn push_scan(&mut self, scan: RangeScan) {
-        self.push_points(scan.stamp, scan.points());
+        self.push_points_from(scan.stamp, scan.points(), self.config.mount);
     }
 
-    /// A scan given as its points in the laser frame, in scan order.
+    /// A scan taken by a laser at `mount` on the base (a panned head): matched against a
+    /// reference taken from another mount, its points are still compared in one frame.
+    pub fn push_scan_from(&mut self, scan: RangeScan, mount: Pose2) {
+        self.push_points_from(scan.stamp, scan.points(), mount);
+    }
+
+    /// A scan given as its points in the laser frame, in scan order, from the configured mount.
     pub fn push_points(&mut self, stamp: Stamp, points: ScanPoints) {
-        self.pending.push_back((stamp, points));
+        self.push_points_from(stamp, points, self.config.mount);
+    }
+
+    /// A scan given as its points in the frame of a laser at `mount` on the base.
+    pub fn push_points_from(&mut self, stamp: Stamp, points: ScanPoints, mount: Pose2) {
+        self.pending.push_back((stamp, points, mount));
         self.place_ready(false);
     }
 
@@ -189,7 +204,7 @@ impl MapBuilder {
     }
 
     fn place_ready(&mut self, all: bool) {
-        while let Some(&(stamp, _)) = self.pending.front() {
+        while let Some(&(stamp, _, _)) = self.pending.front() {
             let odometry = match self.odometry.at(stamp) {
                 Some(pose) => pose,
                 None => match self.odometry.latest() {
@@ -198,26 +213,26 @@ impl MapBuilder {
                     _ => return,
                 },
             };
-            let (stamp, points) = self.pending.pop_front().expect("front exists");
-            self.place(stamp, points, odometry);
+            let (stamp, points, mount) = self.pending.pop_front().expect("front exists");
+            self.place(stamp, points, mount, odometry);
         }
     }
 
-    fn place(&mut self, stamp: Stamp, points: ScanPoints, odometry: Pose2) {
-        let mount = self.config.mount;
+    fn place(&mut self, stamp: Stamp, points: ScanPoints, mount: Pose2, odometry: Pose2) {
         let (estimate, matched, trusted) = match (&self.key, self.placed.last()) {
             (Some(key), Some(last)) => {
-                // Dead-reckon from the last placed scan, then express it in the reference.
+                // Dead-reckon from the last placed scan, then express it in the reference: the
+                // current laser frame seen from the reference's laser frame.
                 let predicted = last.estimate.compose(&last.odometry.relative(&odometry));
                 let base_guess = key.estimate.relative(&predicted);
-                let laser_guess = mount.inverse().compose(&base_guess).compose(&mount);
+                let laser_guess = key.mount.inverse().compose(&base_guess).compose(&mount);
                 let result = self.matcher.align(&key.reference, &points, laser_guess);
                 let trusted = result.correspondences >= self.config.min_correspondences
                     && result.pose.x.is_finite()
                     && result.pose.y.is_finite()
                     && result.pose.theta.is_finite();
                 let laser = if trusted { result.pose } else { laser_guess };
-                let base = mount.compose(&laser).compose(&mount.inverse());
+                let base = key.mount.compose(&laser).compose(&mount.inverse());
                 (key.estimate.compose(&base), Some(result), trusted)
             }
             _ if self.odometry_frame => (odometry, None, false),
@@ -240,6 +255,7 @@ impl MapBuilder {
             self.key = Some(Key {
                 reference: Reference::new(points),
                 estimate,
+                mount,
             });
         }
         self.placed.push(Placed {

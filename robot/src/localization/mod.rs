@@ -17,6 +17,7 @@
 
 mod icp;
 mod kdtree;
+mod level;
 pub mod lines;
 mod lorentz;
 mod map;
@@ -26,6 +27,7 @@ mod scan;
 
 pub use icp::LeastSquares;
 pub use kdtree::KdTree;
+pub use level::{LEVEL_TOLERANCE_RAD, LevelLocaliser};
 pub use lorentz::{Lorentz, THESIS_SIGMAS};
 pub use map::{MapBuilder, MapConfig, MatchStats, Placed};
 pub use matcher::{Convergence, MatchResult, MatcherKind, Reference, ScanMatcher, UnknownMatcher};

@@ -566,6 +566,7 @@ impl MeasuredValues {
             angle_increment: std::f64::consts::PI / (n - 1) as f64,
             range_max_mm,
             ranges_mm,
+            head: None,
         }
     }
 }

@@ -25,6 +25,7 @@
 //! Everything of this kind is recorded as a [`LinkEvent`]: [`SerialRobot::take_events`] hands
 //! them over.
 
+mod head;
 mod laser;
 mod port;
 
@@ -113,6 +114,9 @@ pub struct SerialConfig {
     pub poll: Duration,
     /// Longest the pan-tilt may take to home at power-up (robot clock).
     pub homing_limit: Duration,
+    /// The pan-tilt head's geometry and units, when the laser rides on it: every scan then
+    /// carries the head's angles at its stamp, from the pan-tilt's reports.
+    pub head: Option<crate::mount::HeadGeometry>,
 }
 
 impl SerialConfig {
@@ -133,6 +137,7 @@ impl SerialConfig {
             attempts: 3,
             poll: Duration::from_millis(10),
             homing_limit: Duration::from_secs(120),
+            head: None,
         }
     }
 }
@@ -489,6 +494,7 @@ pub struct SerialRobot {
     laser: Option<LaserLink>,
     laser_configured: bool,
     sonar: SonarSchedule,
+    head: Option<head::HeadTrack>,
     events: Vec<LinkEvent>,
 }
 
@@ -507,6 +513,7 @@ impl SerialRobot {
             laser: None,
             laser_configured: false,
             sonar: SonarSchedule::power_on(),
+            head: config.head.map(head::HeadTrack::new),
             events: Vec::new(),
             config,
             clock,
@@ -878,6 +885,14 @@ impl DriveBase for SerialRobot {
     }
 }
 
+impl SerialRobot {
+    /// The scan with the head's angles at its stamp, when the laser rides on the head.
+    fn with_head(&self, mut scan: LaserScan) -> LaserScan {
+        scan.head = self.head.as_ref().and_then(|h| h.at(scan.stamp));
+        scan
+    }
+}
+
 impl Laser for SerialRobot {
     fn read_scan(&mut self, timeout: Duration) -> Result<Option<LaserScan>, SerialError> {
         let deadline = self.clock.now() + timeout;
@@ -885,7 +900,7 @@ impl Laser for SerialRobot {
         loop {
             let link = self.laser_link()?;
             if let Some(scan) = link.next_scan(poll) {
-                return Ok(Some(scan));
+                return Ok(Some(self.with_head(scan)));
             }
             if self.clock.now() > deadline {
                 return Ok(None);
@@ -905,7 +920,7 @@ impl Laser for SerialRobot {
             link.drop_scans_before(since);
             if let Some(scan) = link.next_scan(poll) {
                 if scan.stamp >= since {
-                    return Ok(Some(scan));
+                    return Ok(Some(self.with_head(scan)));
                 }
                 // As in the contract's default, the timeout restarts with every scan.
                 deadline = self.clock.now() + timeout;
@@ -984,8 +999,14 @@ impl PanTilt for SerialRobot {
     fn pan_tilt(&mut self, command: PanTiltCommand) -> Result<(), SerialError> {
         let line = pt::encode_command(&command)?;
         let letter = command.letter();
-        let (_, reply) = self.pan_tilt_request(&line, letter, Duration::ZERO)?;
-        base::parse_ack(&reply, letter).map_err(Self::reply_error(Device::PanTilt))
+        let (stamp, reply) = self.pan_tilt_request(&line, letter, Duration::ZERO)?;
+        base::parse_ack(&reply, letter).map_err(Self::reply_error(Device::PanTilt))?;
+        if let (Some(head), PanTiltCommand::Pan(_) | PanTiltCommand::Tilt(_)) =
+            (&mut self.head, command)
+        {
+            head.commanded(stamp);
+        }
+        Ok(())
     }
 
     fn wait_pan_tilt(&mut self, wait: PanTiltWait) -> Result<(), SerialError> {
@@ -997,7 +1018,11 @@ impl PanTilt for SerialRobot {
 
     fn pan_tilt_status(&mut self) -> Result<PanTiltStatus, SerialError> {
         let (stamp, reply) = self.pan_tilt_request(pt::STATUS_REQUEST, 'l', Duration::ZERO)?;
-        pt::parse_status(&reply, stamp).map_err(Self::reply_error(Device::PanTilt))
+        let status = pt::parse_status(&reply, stamp).map_err(Self::reply_error(Device::PanTilt))?;
+        if let Some(head) = &mut self.head {
+            head.observe(&status);
+        }
+        Ok(status)
     }
 }
 

@@ -6,9 +6,11 @@
 use crate::config::Scenario;
 use crate::output::logmap::{Panel, occupied_cells, write_log_map_svg};
 use crate::output::{ScanLine, write_scan_lines, write_tum};
-use robot::control::{TourError, TourEvent, run_tour};
+use robot::control::{SceneTag, TourError, TourEvent, run_tour};
 use robot::hardware::{DriveBase, HardwareError, Laser, LaserScan, PanTilt, PanTiltStatus};
-use robot::localization::{MapBuilder, MapConfig, MatchStats, MatcherKind, Placed, RangeScan};
+use robot::localization::{
+    LEVEL_TOLERANCE_RAD, LevelLocaliser, MapConfig, MatchStats, MatcherKind, Placed, RangeScan,
+};
 use robot::{Pose2, Stamp};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -21,8 +23,9 @@ pub struct DriveRecord {
     pub scenario: String,
     /// Steps carried out.
     pub steps: usize,
-    /// Kept scans with the odometry at their stamp (world frame: it starts at the start pose).
-    pub scans: Vec<(LaserScan, Pose2)>,
+    /// Kept scans with the odometry at their stamp (world frame: it starts at the start pose)
+    /// and the 3D scene they were taken for.
+    pub scans: Vec<(LaserScan, Pose2, Option<SceneTag>)>,
     /// The odometry at the end.
     pub final_odometry: Pose2,
     /// The pan-tilt's status once at the scenario's position, if it has one.
@@ -79,15 +82,14 @@ where
         None => None,
     };
     let matcher = matcher.or(scenario.localisation.map(|l| l.matcher));
-    let mut mapper = matcher.map(|kind| {
+    let mut localiser = matcher.map(|kind| {
         let settings = scenario.localisation;
         let config = MapConfig {
-            mount: scenario.robot.laser_mount(),
             keyframe_distance_m: settings.map_or(0.0, |s| s.keyframe_distance_m),
             keyframe_angle_rad: settings.map_or(0.0, |s| s.keyframe_angle_rad),
             ..MapConfig::default()
         };
-        (kind, MapBuilder::in_odometry_frame(kind.build(), config))
+        LevelLocaliser::new(kind, scenario.robot.mount(), config)
     });
     let mut scans = Vec::new();
     let report = run_tour(
@@ -98,26 +100,28 @@ where
         &scenario.tour,
         |event: TourEvent<'_>| match event {
             TourEvent::StepStarted { index, total, .. } => progress(index, total),
-            TourEvent::Scan { scan, odometry } => {
-                if let Some((_, mapper)) = &mut mapper {
-                    mapper.push_odometry(scan.stamp, odometry);
-                    mapper.push_scan(RangeScan::from(scan));
+            TourEvent::Scan {
+                scan,
+                odometry,
+                scene,
+            } => {
+                if let Some(localiser) = &mut localiser {
+                    localiser.push(scan, odometry);
                 }
-                scans.push((scan.clone(), odometry));
+                scans.push((scan.clone(), odometry, scene));
             }
         },
     )?;
     progress(report.steps, report.steps);
-    let localisation = mapper.map(|(kind, mut mapper)| {
-        mapper.finish();
-        (kind, mapper.placed().to_vec(), mapper.map_points().to_vec())
+    let localisation = localiser.map(|localiser| {
+        let kind = localiser.kind();
+        let (placed, map) = localiser.finish();
+        (kind, placed, map)
     });
     Ok(DriveRecord {
         scenario: scenario.name.clone(),
         steps: report.steps,
-        end: scans
-            .last()
-            .map_or(report.end, |(s, _): &(LaserScan, Pose2)| s.stamp),
+        end: scans.last().map_or(report.end, |(s, _, _)| s.stamp),
         scans,
         final_odometry: report.final_odometry,
         pan_tilt,
@@ -178,7 +182,7 @@ pub fn write_drive(
     };
     write_tum(
         &file("odometry.tum"),
-        record.scans.iter().map(|(s, p)| (s.stamp, *p)),
+        record.scans.iter().map(|(s, p, _)| (s.stamp, *p)),
     )?;
     if let Some((_, placed, _)) = &record.localisation {
         write_tum(
@@ -186,40 +190,27 @@ pub fn write_drive(
             placed.iter().map(|p| (p.stamp, p.estimate)),
         )?;
     }
-    // Where the laser sat on the base: on its fixed mount, or where the head was put.
-    let head = scenario
-        .robot
-        .pan_tilt
-        .as_ref()
-        .zip(record.pan_tilt)
-        .map(|(desc, status)| {
-            let head = crate::devices::pan_tilt::PanTiltHead::new(desc);
-            head.laser_frame(Pose2::IDENTITY, head.angles_at(status.pan, status.tilt))
-        });
-    let (mount, z, tilt) = match head {
-        Some(frame) => (frame.mount_on(Pose2::IDENTITY), frame.origin[2], frame.tilt),
-        None => (
-            scenario.robot.laser_mount(),
-            scenario.robot.laser.z_m.get(),
-            0.0,
-        ),
-    };
+    let mount = scenario.robot.mount();
     write_scan_lines(
         &file("scans.jsonl"),
         record
             .scans
             .iter()
-            .map(|(s, p)| ScanLine::new(s, *p, mount, z, tilt)),
+            .map(|(s, p, scene)| ScanLine::new(s, *p, &mount, *scene)),
     )?;
+    // The map placed by odometry: the level scans, each from where its head put the laser.
     let mut odometry_map = Vec::new();
-    for (scan, pose) in &record.scans {
-        let laser = pose.compose(&mount);
+    for (scan, pose, _) in &record.scans {
+        let Some(on_base) = LevelLocaliser::level_mount(&mount, scan, LEVEL_TOLERANCE_RAD) else {
+            continue;
+        };
+        let laser = pose.compose(&on_base);
         odometry_map.extend(RangeScan::from(scan).points().xy.iter().map(|q| {
             let (x, y) = laser.transform_point(q[0], q[1]);
             [x, y]
         }));
     }
-    let odometry_path: Vec<Pose2> = record.scans.iter().map(|(_, p)| *p).collect();
+    let odometry_path: Vec<Pose2> = record.scans.iter().map(|(_, p, _)| *p).collect();
     let mut panels = vec![Panel {
         title: "odometry".into(),
         points: &odometry_map,
@@ -301,10 +292,35 @@ pub struct DriveArgs {
     pub quiet: bool,
 }
 
+/// How to reach the devices of `scenario`'s robot: the rates, the laser's sweep and range, and
+/// the pan-tilt head's geometry from its description.
+pub fn serial_config(
+    scenario: &Scenario,
+    base: robot::serial::Endpoint,
+    pan_tilt: Option<robot::serial::Endpoint>,
+    laser: Option<robot::serial::Endpoint>,
+) -> robot::serial::SerialConfig {
+    let robot = &scenario.robot;
+    let mut config = robot::serial::SerialConfig::new(base);
+    config.pan_tilt = pan_tilt;
+    config.laser = laser;
+    config.base_baud = robot.drive.serial_baud;
+    if let Some(pt) = &robot.pan_tilt {
+        config.pan_tilt_baud = pt.serial_baud;
+    }
+    config.laser_baud = robot.laser.baud;
+    config.laser_sweep = std::time::Duration::from_secs_f64(robot.laser.sweep_s.get());
+    config.laser_range_max_mm = (robot.laser.range_max_m.get() * 1000.0).round() as u16;
+    if let robot::mount::LaserMount::Head(head) = robot.mount() {
+        config.head = Some(head);
+    }
+    config
+}
+
 /// Runs `twin drive`.
 pub fn main(args: DriveArgs) -> Result<(), super::CommandError> {
     use super::CommandError;
-    use robot::serial::{SerialConfig, SerialRobot};
+    use robot::serial::SerialRobot;
     if !(args.time_scale > 0.0 && args.time_scale <= 1000.0) {
         return Err(CommandError::option(
             "--time-scale",
@@ -313,16 +329,7 @@ pub fn main(args: DriveArgs) -> Result<(), super::CommandError> {
         ));
     }
     let scenario = Scenario::load(&args.script)?;
-    let mut config = SerialConfig::new(args.base);
-    config.pan_tilt = args.pan_tilt;
-    config.laser = Some(args.laser);
-    config.base_baud = scenario.robot.drive.serial_baud;
-    if let Some(pt) = &scenario.robot.pan_tilt {
-        config.pan_tilt_baud = pt.serial_baud;
-    }
-    config.laser_baud = scenario.robot.laser.baud;
-    config.laser_sweep = std::time::Duration::from_secs_f64(scenario.robot.laser.sweep_s.get());
-    config.laser_range_max_mm = (scenario.robot.laser.range_max_m.get() * 1000.0).round() as u16;
+    let config = serial_config(&scenario, args.base, args.pan_tilt, Some(args.laser));
     let clock: std::sync::Arc<dyn robot::Clock> =
         std::sync::Arc::new(super::serve::WallClock::new(args.time_scale));
     let mut robot = SerialRobot::open(config, clock).map_err(CommandError::Open)?;

@@ -9,7 +9,7 @@ use robot::control::{TourConfig, TourError, TourEvent, run_tour};
 use robot::hardware::{
     DriveBase, DriveWait, PanTilt, PanTiltPosition, PanTiltStatus, SonarCommand, SonarRing,
 };
-use robot::localization::{MapBuilder, MapConfig, RangeScan};
+use robot::localization::{LevelLocaliser, MapConfig};
 
 use std::time::Instant;
 
@@ -66,31 +66,29 @@ pub fn run_scenario(
         start_sonar(&mut robot, sonar).map_err(|e| tour_error(hardware_error("(sonar)", e)))?;
     }
     let mut kept = Vec::new();
-    let mut mapper = scenario.localisation.map(|settings| {
+    let mut localiser = scenario.localisation.map(|settings| {
         let config = MapConfig {
-            mount: scenario.robot.laser_mount(),
             keyframe_distance_m: settings.keyframe_distance_m,
             keyframe_angle_rad: settings.keyframe_angle_rad,
             ..MapConfig::default()
         };
-        let matcher = settings.matcher.build();
-        (
-            settings.matcher,
-            MapBuilder::in_odometry_frame(matcher, config),
-        )
+        LevelLocaliser::new(settings.matcher, scenario.robot.mount(), config)
     });
     let mut localising = 0.0;
     let report = {
         let mut observer = |event: TourEvent<'_>| match event {
             TourEvent::StepStarted { index, total, .. } => progress(index, total),
-            TourEvent::Scan { scan, odometry } => {
-                if let Some((_, mapper)) = &mut mapper {
+            TourEvent::Scan {
+                scan,
+                odometry,
+                scene,
+            } => {
+                if let Some(localiser) = &mut localiser {
                     let clock = Instant::now();
-                    mapper.push_odometry(scan.stamp, odometry);
-                    mapper.push_scan(RangeScan::from(scan));
+                    localiser.push(scan, odometry);
                     localising += clock.elapsed().as_secs_f64();
                 }
-                kept.push((scan.clone(), odometry));
+                kept.push((scan.clone(), odometry, scene));
             }
         };
         run_tour(
@@ -114,7 +112,7 @@ pub fn run_scenario(
     // Scans are delivered after they were measured: the twin has simulated past every stamp.
     let scans = kept
         .into_iter()
-        .map(|(scan, odometry)| {
+        .map(|(scan, odometry, scene)| {
             let truth = robot
                 .true_pose_at(scan.stamp)
                 .unwrap_or_else(|| robot.true_pose());
@@ -126,15 +124,17 @@ pub fn run_scenario(
                 odometry,
                 truth,
                 frame,
+                scene,
             }
         })
         .collect();
-    let localisation = mapper.map(|(matcher, mut mapper)| {
-        mapper.finish();
+    let localisation = localiser.map(|localiser| {
+        let matcher = localiser.kind();
+        let (placed, map) = localiser.finish();
         LocalisationRecord {
             matcher,
-            placed: mapper.placed().to_vec(),
-            map: mapper.map_points().to_vec(),
+            placed,
+            map,
             wall_seconds: localising,
         }
     });

@@ -781,6 +781,7 @@ mod tests {
             angle_increment: 0.01,
             range_max_mm: 32_000,
             ranges_mm: vec![1234; 361],
+            head: None,
         };
         let bytes = lms.scan_telegram(&scan);
         let values = MeasuredValues::from_telegram(&Telegram::decode(&bytes).unwrap().0).unwrap();
@@ -800,6 +801,7 @@ mod tests {
             angle_increment: 0.01,
             range_max_mm: 32_000,
             ranges_mm: vec![5000; 361],
+            head: None,
         };
         assert_eq!(lms.scan_telegram(&scan).len(), 732);
         assert!(!lms.wants_scan(), "one scan per request");

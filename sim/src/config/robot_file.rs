@@ -7,6 +7,7 @@
 
 use super::error::{ConfigError, Source};
 use super::values::{Angle, Finite, NonNegative, Positive, UnitInterval};
+use robot::mount::{HeadGeometry, LaserMount};
 use robot::{DriveGeometry, Pose2};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -322,7 +323,27 @@ impl RobotDescription {
         }
     }
 
-    /// The laser's pose on the base (axle centre frame).
+    /// Where the laser sits: on its fixed mount, or on the pan-tilt head with the head's
+    /// geometry and units (for the robot code: the chain of thesis Eq. 4.1).
+    pub fn mount(&self) -> LaserMount {
+        match &self.pan_tilt {
+            Some(pt) => LaserMount::Head(HeadGeometry {
+                axis: [pt.axis_x_m.get(), pt.axis_y_m.get(), pt.axis_z_m.get()],
+                laser_forward: pt.laser_forward_m.get(),
+                laser_up: pt.laser_up_m.get(),
+                pan_per_position: pt.pan_deg_per_turn.get().to_radians(),
+                tilt_per_position: pt.tilt_deg_per_turn.get().to_radians(),
+                level_position: f64::from(pt.level_position),
+            }),
+            None => LaserMount::Fixed {
+                pose: self.laser_mount(),
+                z: self.laser.z_m.get(),
+            },
+        }
+    }
+
+    /// The laser's pose on the base (axle centre frame); on a pan-tilt, where the level head
+    /// looking forward puts it.
     pub fn laser_mount(&self) -> Pose2 {
         Pose2::new(
             self.laser.x_m.get(),

@@ -24,6 +24,7 @@ use crate::devices::firmware::pan_tilt::MAX_ABS_GIRO;
 use crate::devices::laser::LaserFrame;
 use crate::devices::motor::{Motor, MotorParams};
 use robot::Pose2;
+pub use robot::hardware::HeadAngles;
 use std::f64::consts::TAU;
 
 /// Pulse-accumulator edges per motor turn.
@@ -109,24 +110,6 @@ pub struct PanTiltHead {
     axis: [f64; 3],
     laser_forward: f64,
     laser_up: f64,
-}
-
-/// The joints' angles: pan counter-clockwise from forward, tilt up from level, radians.
-#[derive(Copy, Clone, Debug, Default, PartialEq)]
-pub struct HeadAngles {
-    /// Pan, radians.
-    pub pan: f64,
-    /// Tilt, radians.
-    pub tilt: f64,
-}
-
-impl robot::odometry::Interpolate for HeadAngles {
-    fn interpolate(&self, other: &HeadAngles, s: f64) -> HeadAngles {
-        HeadAngles {
-            pan: self.pan + (other.pan - self.pan) * s,
-            tilt: self.tilt + (other.tilt - self.tilt) * s,
-        }
-    }
 }
 
 impl PanTiltHead {

@@ -57,7 +57,7 @@ pub fn write_all(record: &RunRecord, scenario: &Scenario, dir: &Path) -> std::io
             loc.placed.iter().map(|p| (p.stamp, p.estimate)),
         )?;
     }
-    write_scans(&file("scans.jsonl"), &record.scans)?;
+    write_scans(&file("scans.jsonl"), &record.scans, &scenario.robot.mount())?;
     Summary::of(record, (&scenario.world.name, &scenario.robot.name))
         .write(&file("summary.json"))?;
     if let Some(sonar) = &record.sonar {

@@ -294,9 +294,11 @@ impl Twin {
             height: chassis.height,
         };
         let mut rng = rng::substream(lidar.stream_seed, pending.index);
-        let scan = lidar
+        let mut scan = lidar
             .model
             .scan(map, Some(body), pending.frame, pending.stamp, &mut rng);
+        // The head's angles when the scan was measured, interpolated on its history.
+        scan.head = self.head_angles_at(pending.stamp);
         Some((pending.delivery, scan))
     }
 

@@ -240,6 +240,7 @@ impl LaserModel {
             angle_increment: self.angle_increment,
             range_max_mm: self.range_max_mm,
             ranges_mm,
+            head: None,
         }
     }
 
