@@ -13,6 +13,7 @@
 //! - [`control`]: what the robot does — scripted tours of firmware motions.
 //! - [`localization`]: scan matchers (least squares, Lorentzian NLM, line-assisted, MbICP) and
 //!   the map builder that chains them.
+//! - [`reconstruction`]: 3D scenes from the pan-tilt laser, meshes and merged models.
 //! - [`serial`]: [`SerialRobot`](serial::SerialRobot), the backend that drives the real robot (or
 //!   the twin's serial face) over serial ports or TCP.
 //! - [`logs`]: readers of recorded runs (CARMEN `.clf`, the `.script` and RobotLogger `.log`
@@ -33,6 +34,7 @@ pub mod logs;
 pub mod mount;
 pub mod odometry;
 pub mod protocol;
+pub mod reconstruction;
 pub mod serial;
 pub mod time;
 

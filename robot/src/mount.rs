@@ -136,6 +136,21 @@ impl LaserMount {
 pub struct LaserPose(pub Isometry3<f64>);
 
 impl LaserPose {
+    /// The pose of a laser at `(planar.x, planar.y, z)` whose middle beam has heading
+    /// `planar.theta` and rises by `tilt` (no roll: the pan-tilt head cannot roll it), as
+    /// `scans.jsonl` records it.
+    pub fn from_planar(planar: Pose2, z: f64, tilt: f64) -> Self {
+        LaserPose(
+            Isometry3::from_parts(
+                Translation3::new(planar.x, planar.y, z),
+                UnitQuaternion::from_axis_angle(&Vector3::z_axis(), planar.theta),
+            ) * Isometry3::from_parts(
+                Translation3::identity(),
+                UnitQuaternion::from_axis_angle(&Vector3::y_axis(), -tilt),
+            ),
+        )
+    }
+
     /// The optical centre in the parent frame, metres.
     pub fn origin(&self) -> [f64; 3] {
         let t = self.0.translation.vector;
@@ -218,6 +233,10 @@ mod tests {
         let p = laser.point(0.0, 2.0);
         assert!((p[2] - o[2] - 1.0).abs() < 1e-12, "{p:?}");
         assert!(!laser.is_level(1e-3));
+        // Rebuilt from what scans.jsonl records, it is the same pose.
+        let again = LaserPose::from_planar(laser.planar(), o[2], laser.tilt());
+        let (a, b) = (laser.point(0.3, 4.0), again.point(0.3, 4.0));
+        assert!((0..3).all(|k| (a[k] - b[k]).abs() < 1e-12), "{a:?} {b:?}");
         assert!(head.laser_on_base(HeadAngles::default()).is_level(1e-9));
     }
 

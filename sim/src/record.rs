@@ -1,12 +1,15 @@
 //! What a run produced, in memory: each kept scan with the odometry and the twin's truth beside
-//! it, the true path, the sonar ring's last reading, the scan-matching estimate. The files of
+//! it, the true path, the sonar ring's last reading, the scan-matching estimate, the 3D models. The files of
 //! [`crate::output`] and the checks of [`crate::commands::check`] are computed from it.
 
 use crate::devices::laser::LaserFrame;
+use crate::world::score::Accuracy;
 use robot::control::SceneTag;
 use robot::hardware::{LaserScan, PanTiltStatus};
 use robot::localization::{MatcherKind, Placed};
+use robot::reconstruction::{MeshOptions, Model};
 use robot::{Pose2, Stamp};
+use serde::Serialize;
 
 /// One scan as recorded by a run.
 #[derive(Clone, Debug, PartialEq)]
@@ -69,6 +72,8 @@ pub struct RunRecord {
     pub pan_tilt: Option<PanTiltStatus>,
     /// The scan-matching estimate, when the scenario localises.
     pub localisation: Option<LocalisationRecord>,
+    /// The 3D models of the run's scenes, when its script took any.
+    pub reconstruction: Option<Reconstruction>,
 }
 
 /// What the localisation made of a run's scans.
@@ -125,5 +130,87 @@ impl RunRecord {
         robot::geometry::wrap_angle(self.final_odometry.theta - self.final_truth.theta)
             .to_degrees()
             .abs()
+    }
+}
+
+/// Where a model's scenes were placed.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Placement {
+    /// By the 2D localisation of the level scans.
+    Estimate,
+    /// By the odometry.
+    Odometry,
+    /// By the twin's true pose.
+    Truth,
+}
+
+impl Placement {
+    /// Its name in files and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Placement::Estimate => "estimate",
+            Placement::Odometry => "odometry",
+            Placement::Truth => "truth",
+        }
+    }
+}
+
+/// A model and, when the world is known, its scores.
+#[derive(Clone, Debug)]
+pub struct PlacedModel {
+    /// How its scenes were placed.
+    pub placement: Placement,
+    /// The points, normals and mesh.
+    pub model: Model,
+    /// Its accuracy against the true surfaces.
+    pub accuracy: Option<Accuracy>,
+}
+
+/// One validity rule tried on the model of the sweep.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RuleTrial {
+    /// The rule, readably.
+    pub rule: String,
+    /// Valid triangles over those the grids offer.
+    pub valid_share: f64,
+    /// Mesh area, square metres.
+    pub mesh_area_m2: f64,
+    /// The part of it farther than 5 cm from every true surface.
+    pub phantom_area_m2: f64,
+    /// The part of the phantom area that bridges readings lying on true surfaces (the rule's
+    /// doing, not the sensor's ghosts).
+    pub bridge_area_m2: f64,
+    /// The part within 5 cm of a true surface.
+    pub true_area_m2: f64,
+}
+
+/// The 3D reconstruction of a run.
+#[derive(Clone, Debug)]
+pub struct Reconstruction {
+    /// How the scenes were meshed.
+    pub options: MeshOptions,
+    /// The models: by the estimate (if the run localised), by odometry, by the truth (twin).
+    pub models: Vec<PlacedModel>,
+    /// Validity rules tried on the best-placed model (truth, else estimate), with the world.
+    pub sweep: Vec<RuleTrial>,
+    /// Wall-clock seconds building the models (machine-dependent).
+    pub build_seconds: f64,
+    /// Wall-clock seconds scoring them (machine-dependent).
+    pub score_seconds: f64,
+}
+
+impl Reconstruction {
+    /// The model people look at: placed by the estimate if there is one, else by odometry.
+    pub fn main(&self) -> &PlacedModel {
+        self.models
+            .iter()
+            .find(|m| m.placement == Placement::Estimate)
+            .unwrap_or(&self.models[0])
+    }
+
+    /// The model placed by `placement`, if built.
+    pub fn placed(&self, placement: Placement) -> Option<&PlacedModel> {
+        self.models.iter().find(|m| m.placement == placement)
     }
 }

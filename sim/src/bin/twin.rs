@@ -9,6 +9,7 @@
 //! twin drive scenarios/lab-tour.toml --base /dev/ttyUSB0 --laser /dev/ttyUSB2 [--out DIR]
 //! twin montecarlo studies/table-5-1.toml [--out DIR] [--threads N] [--shard K/N]
 //! twin montecarlo merge DIR... --out DIR
+//! twin reconstruct out/survey-lab [--world worlds/lab.toml] [--rule incidence]
 //! ```
 //!
 //! This file only parses the arguments; each command lives in `sim::commands`.
@@ -53,6 +54,10 @@ enum Command {
     /// bit-identical whatever the thread count. `twin montecarlo merge DIR... --out DIR` combines
     /// shards.
     Montecarlo(commands::montecarlo::MontecarloArgs),
+    /// Rebuild the 3D model of a finished run from its output folder (scans.jsonl and the
+    /// poses) — a twin run's or a real robot's drive — and write it as PLY with its figures and
+    /// picture; with --world, score it against the true surfaces.
+    Reconstruct(commands::reconstruct::ReconstructArgs),
     /// Match scan pairs read as JSON Lines from stdin, one result line per pair on stdout.
     ///
     /// Input: {"ref": {"angle_min", "angle_increment", "range_max", "ranges": [...]}, "cur": {...},
@@ -69,6 +74,7 @@ fn main() -> ExitCode {
         Command::Serve(args) => commands::serve::main(args),
         Command::Drive(args) => commands::drive::main(args),
         Command::Montecarlo(args) => commands::montecarlo::main(args),
+        Command::Reconstruct(args) => commands::reconstruct::main(args),
         Command::Match(args) => commands::map::match_main(args),
     };
     match outcome {

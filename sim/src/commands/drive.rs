@@ -105,7 +105,8 @@ where
                 odometry,
                 scene,
             } => {
-                if let Some(localiser) = &mut localiser {
+                // A scene's scans are for the 3D model (see `twin run`).
+                if let Some(localiser) = localiser.as_mut().filter(|_| scene.is_none()) {
                     localiser.push(scan, odometry);
                 }
                 scans.push((scan.clone(), odometry, scene));

@@ -5,6 +5,7 @@
 //! - [`map`]: `twin map` and `twin match`, localisation over recorded logs and scan pairs;
 //! - [`serve`]: `twin serve`, the twin's devices byte for byte on TCP ports or pseudo-terminals;
 //! - [`drive`]: `twin drive`, a scenario's script through any backend (the real robot);
+//! - [`reconstruct`]: the 3D model of a run's scenes, and `twin reconstruct` from a run's folder;
 //! - [`montecarlo`]: `twin montecarlo`, the thesis's Table 5.1 study, parallel, resumable and
 //!   shardable.
 
@@ -12,6 +13,7 @@ pub mod check;
 pub mod drive;
 pub mod map;
 pub mod montecarlo;
+pub mod reconstruct;
 pub mod run;
 pub mod serve;
 
@@ -98,6 +100,9 @@ pub enum CommandError {
     /// The real robot's devices cannot be opened.
     #[error("opening the robot's devices: {0}")]
     Open(#[source] robot::serial::SerialError),
+    /// A run's folder cannot be reconstructed.
+    #[error(transparent)]
+    RunFolder(#[from] reconstruct::FolderError),
     /// A drive through the serial backend failed.
     #[error(transparent)]
     Drive(#[from] drive::DriveError<robot::serial::SerialError>),

@@ -1,6 +1,7 @@
 //! The `twin run` job: a scenario's script, driven through the hardware contract by the robot
 //! crate's tour, with the twin's ground truth recorded beside every scan.
 
+use super::reconstruct::{SceneInput, reconstruct};
 use crate::config::scenario::SonarSettings;
 use crate::config::{ConfigError, Scenario};
 use crate::record::{LocalisationRecord, RunRecord, ScanRecord, SonarRecord};
@@ -27,6 +28,15 @@ pub enum RunError {
         /// What went wrong.
         #[source]
         source: TourError<SimError>,
+    },
+    /// The scenes' scans cannot be made into a 3D model.
+    #[error("{scenario}: 3D reconstruction: {source}")]
+    Reconstruction {
+        /// The scenario's name.
+        scenario: String,
+        /// What went wrong.
+        #[source]
+        source: robot::reconstruction::SceneError,
     },
 }
 
@@ -83,7 +93,9 @@ pub fn run_scenario(
                 odometry,
                 scene,
             } => {
-                if let Some(localiser) = &mut localiser {
+                // A scene's scans are for the 3D model: the robot stands still while they are
+                // taken, and its station scan (level, untagged) already localised it.
+                if let Some(localiser) = localiser.as_mut().filter(|_| scene.is_none()) {
                     let clock = Instant::now();
                     localiser.push(scan, odometry);
                     localising += clock.elapsed().as_secs_f64();
@@ -110,7 +122,7 @@ pub fn run_scenario(
     };
     progress(report.steps, report.steps);
     // Scans are delivered after they were measured: the twin has simulated past every stamp.
-    let scans = kept
+    let scans: Vec<ScanRecord> = kept
         .into_iter()
         .map(|(scan, odometry, scene)| {
             let truth = robot
@@ -138,6 +150,32 @@ pub fn run_scenario(
             wall_seconds: localising,
         }
     });
+    // The 3D models of the scenes, placed by the estimate, the odometry and the truth.
+    let mount = scenario.robot.mount();
+    let inputs: Vec<SceneInput> = scans
+        .iter()
+        .filter_map(|r: &ScanRecord| {
+            Some(SceneInput {
+                tag: r.scene?,
+                scan: r.scan.clone(),
+                laser: mount.laser_on_base(r.scan.head),
+                odometry: r.odometry,
+                truth: Some(r.truth),
+            })
+        })
+        .collect();
+    let map = (!inputs.is_empty()).then(|| crate::world::WorldMap::new(&scenario.world));
+    let reconstruction = reconstruct(
+        &inputs,
+        localisation.as_ref().map(|l| l.placed.as_slice()),
+        &scenario.reconstruction.mesh,
+        map.as_ref(),
+        scenario.reconstruction.sweep,
+    )
+    .map_err(|source| RunError::Reconstruction {
+        scenario: scenario.name.clone(),
+        source,
+    })?;
     let twin = robot.twin();
     Ok(RunRecord {
         scenario: scenario.name.clone(),
@@ -155,6 +193,7 @@ pub fn run_scenario(
         sonar,
         pan_tilt,
         localisation,
+        reconstruction,
     })
 }
 
@@ -281,6 +320,9 @@ pub fn main(args: RunArgs) -> Result<(), super::CommandError> {
                 "estimate ({}): final error {final_m:.3} m, {final_deg:.2} deg; RMS {rms_m:.3} m, {rms_deg:.2} deg",
                 loc.matcher
             );
+        }
+        if let Some(recon) = &record.reconstruction {
+            print!("{}", crate::output::reconstruction_report(recon));
         }
         println!("wrote {}", written.dir.display());
         for f in &written.files {

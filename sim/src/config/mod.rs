@@ -15,6 +15,6 @@ pub mod world;
 pub use error::ConfigError;
 pub use outliers::Outliers;
 pub use robot_file::RobotDescription;
-pub use scenario::{NoiseSettings, Scenario};
+pub use scenario::{NoiseSettings, ReconstructionSettings, Scenario};
 pub use study::Study;
 pub use world::{Material, Optics, Wall, WorldDescription};

@@ -116,6 +116,16 @@ pub struct LocalisationSettings {
     pub keyframe_angle_rad: f64,
 }
 
+/// How a run's 3D scenes are meshed and scored (`[reconstruction]`).
+#[derive(Copy, Clone, Debug, Default, PartialEq)]
+pub struct ReconstructionSettings {
+    /// The mesh's validity rule and trimming.
+    pub mesh: robot::reconstruction::MeshOptions,
+    /// Also try the validity rules of the sweep (50…400 mm, the incidence rule) and report
+    /// what each trades in `reconstruction.json`.
+    pub sweep: bool,
+}
+
 /// A validated scenario with its world and robot loaded.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scenario {
@@ -141,6 +151,9 @@ pub struct Scenario {
     pub pan_tilt: Option<robot::hardware::PanTiltPosition>,
     /// The scan matcher the run localises with, if any.
     pub localisation: Option<LocalisationSettings>,
+    /// How the 3D scenes of `scene` and `survey` steps are meshed and scored
+    /// (`[reconstruction]`).
+    pub reconstruction: ReconstructionSettings,
     /// What the run must show (`[[check]]`).
     pub checks: Vec<Check>,
     /// The file it was read from.
@@ -152,7 +165,22 @@ impl Scenario {
     pub fn load(path: impl AsRef<Path>) -> Result<Self, ConfigError> {
         let source = Source::read(path.as_ref())?;
         let file: ScenarioFile = source.parse()?;
-        let world = load_named(&source, &file.world, "world", |p| WorldDescription::load(p))?;
+        let mut world = load_named(&source, &file.world, "world", |p| WorldDescription::load(p))?;
+        if let Some(start) = &file.start {
+            // Put the robot elsewhere in the same world; the twin checks it is clear of walls.
+            let (lo, hi) = world.bounds();
+            let inside = |v: f64, k: usize| v.is_finite() && v >= lo[k] && v <= hi[k];
+            if !(inside(start.x, 0) && inside(start.y, 1) && start.heading_deg.is_finite()) {
+                return Err(source.error_in_file(
+                    Some("start".into()),
+                    format!(
+                        "expected x in [{}, {}], y in [{}, {}] (the world's extent) and a finite heading, found x = {}, y = {}, heading_deg = {}",
+                        lo[0], hi[0], lo[1], hi[1], start.x, start.y, start.heading_deg
+                    ),
+                ));
+            }
+            world.start = robot::Pose2::new(start.x, start.y, start.heading_deg.to_radians());
+        }
         let robot = load_named(&source, &file.robot, "robot", |p| RobotDescription::load(p))?;
         let mut noise = NoiseSettings::defaults_for(&robot);
         if let Some(n) = &file.noise {
@@ -283,6 +311,53 @@ impl Scenario {
                 keyframe_angle_rad: l.keyframe_angle_deg.map_or(0.0, |a| a.get().to_radians()),
             }),
         };
+        let reconstruction = match &file.reconstruction {
+            None => ReconstructionSettings::default(),
+            Some(r) => {
+                let invalid = |field: &str, message: String| {
+                    source.error_in_file(Some(format!("reconstruction.{field}")), message)
+                };
+                let max_mm = r.max_mm.map_or(200.0, Positive::get);
+                if !(5.0..=10_000.0).contains(&max_mm) {
+                    return Err(invalid(
+                        "max_mm",
+                        format!("expected 5 to 10000 millimetres, found {max_mm}"),
+                    ));
+                }
+                let rule = match r.rule.as_deref().unwrap_or("thesis") {
+                    "thesis" => {
+                        robot::reconstruction::MeshRule::thesis_with_max((max_mm * 1e-3) as f32)
+                    }
+                    "incidence" if r.max_mm.is_none() => robot::reconstruction::MeshRule::INCIDENCE,
+                    "incidence" => {
+                        return Err(invalid(
+                            "max_mm",
+                            "only the thesis rule takes max_mm".into(),
+                        ));
+                    }
+                    other => {
+                        return Err(invalid(
+                            "rule",
+                            format!("unknown rule {other:?}: expected \"thesis\" or \"incidence\""),
+                        ));
+                    }
+                };
+                let trim_beams = r.trim_beams.unwrap_or(0);
+                if trim_beams > 180 {
+                    return Err(invalid(
+                        "trim_beams",
+                        format!("expected at most 180 beams, found {trim_beams}"),
+                    ));
+                }
+                ReconstructionSettings {
+                    mesh: robot::reconstruction::MeshOptions {
+                        rule,
+                        trim_beams: usize::from(trim_beams),
+                    },
+                    sweep: r.sweep.unwrap_or(false),
+                }
+            }
+        };
         let checks = parse_checks(
             &file.check,
             &source,
@@ -302,6 +377,7 @@ impl Scenario {
             checks,
             pan_tilt,
             localisation,
+            reconstruction,
             path: source.path.clone(),
         })
     }
@@ -335,6 +411,7 @@ struct ScenarioFile {
     #[serde(default)]
     description: String,
     world: Spanned<String>,
+    start: Option<StartFile>,
     robot: Spanned<String>,
     seed: u64,
     noise: Option<NoiseFile>,
@@ -343,6 +420,7 @@ struct ScenarioFile {
     sonar: Option<SonarFile>,
     pan_tilt: Option<PanTiltFile>,
     localisation: Option<LocalisationFile>,
+    reconstruction: Option<ReconstructionFile>,
     #[serde(default)]
     check: Vec<Spanned<CheckFile>>,
 }
@@ -353,6 +431,25 @@ struct LocalisationFile {
     matcher: Spanned<String>,
     keyframe_distance_m: Option<NonNegative>,
     keyframe_angle_deg: Option<NonNegative>,
+}
+
+/// `[start]`: where the robot is put instead of the world's start.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StartFile {
+    x: f64,
+    y: f64,
+    #[serde(default)]
+    heading_deg: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ReconstructionFile {
+    rule: Option<String>,
+    max_mm: Option<Positive>,
+    trim_beams: Option<u16>,
+    sweep: Option<bool>,
 }
 
 #[derive(Deserialize)]

@@ -7,6 +7,9 @@
 //! bytes.
 
 pub mod logmap;
+mod ply;
+mod reconstruction;
+mod render;
 mod scans;
 mod sonar;
 mod summary;
@@ -14,12 +17,60 @@ mod svg;
 mod tilted;
 mod tum;
 
-pub use scans::{ScanLine, write_scan_lines, write_scans};
+pub use ply::write_ply;
+pub use reconstruction::{
+    ReconstructionFile, THESIS_QUADS, THESIS_TRIANGLES, reconstruction_file, reconstruction_report,
+    write_reconstruction,
+};
+pub use render::{Picture, write_model_png};
+pub use scans::{ScanLine, read_scan_lines, write_scan_lines, write_scans};
 pub use sonar::write_sonar;
 pub use summary::{LocalisationSummary, Summary, estimate_errors};
 pub use svg::write_map_svg;
 pub use tilted::{last_tilted, write_tilted_svg};
-pub use tum::write_tum;
+pub use tum::{read_tum, write_tum};
+
+/// Why a file a run wrote cannot be read back.
+#[derive(Debug, thiserror::Error)]
+pub enum ReadError {
+    /// The file cannot be read.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What failed.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A line is not what the format says.
+    #[error("{}:{line}: {message}", path.display())]
+    Malformed {
+        /// The file.
+        path: PathBuf,
+        /// Line number, from 1.
+        line: usize,
+        /// What was wrong and what was expected.
+        message: String,
+    },
+}
+
+impl ReadError {
+    /// The whole file as text.
+    pub(crate) fn read(path: &Path) -> Result<String, ReadError> {
+        std::fs::read_to_string(path).map_err(|source| ReadError::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+    }
+
+    pub(crate) fn malformed(path: &Path, line: usize, message: impl Into<String>) -> ReadError {
+        ReadError::Malformed {
+            path: path.to_path_buf(),
+            line,
+            message: message.into(),
+        }
+    }
+}
 
 use crate::config::Scenario;
 use crate::record::RunRecord;
@@ -71,6 +122,15 @@ pub fn write_all(record: &RunRecord, scenario: &Scenario, dir: &Path) -> std::io
             &scenario.world,
             &record.scenario,
         )?;
+    }
+    if let Some(recon) = &record.reconstruction {
+        let map = crate::world::WorldMap::new(&scenario.world);
+        files.extend(write_reconstruction(
+            dir,
+            recon,
+            &record.scenario,
+            Some(&map),
+        )?);
     }
     Ok(Written {
         dir: dir.to_path_buf(),

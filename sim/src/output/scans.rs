@@ -3,7 +3,7 @@
 use crate::record::ScanRecord;
 use robot::Pose2;
 use robot::control::SceneTag;
-use robot::hardware::LaserScan;
+use robot::hardware::{HeadAngles, LaserScan};
 use robot::mount::LaserMount;
 use serde::Serialize;
 use std::io::{BufWriter, Write};
@@ -94,6 +94,77 @@ impl ScanLine {
             station: scene.map(|t| t.station),
         }
     }
+}
+
+impl ScanLine {
+    /// The scan as the robot received it (ranges back in millimetres, the head's angles).
+    pub fn to_scan(&self, stamp: robot::Stamp) -> LaserScan {
+        let range_max_mm = (self.range_max * 1000.0).round().clamp(1.0, 65_535.0) as u16;
+        LaserScan {
+            stamp,
+            angle_min: self.angle_min,
+            angle_increment: self.angle_increment,
+            range_max_mm,
+            ranges_mm: self
+                .ranges
+                .iter()
+                .map(|&r| (r * 1000.0).round().clamp(0.0, f64::from(range_max_mm)) as u16)
+                .collect(),
+            head: self
+                .head_pan
+                .zip(self.head_tilt)
+                .map(|(pan, tilt)| HeadAngles { pan, tilt }),
+        }
+    }
+}
+
+/// Reads a `scans.jsonl`: every line one [`ScanLine`], in time order, with finite numbers.
+pub fn read_scan_lines(path: &Path) -> Result<Vec<ScanLine>, super::ReadError> {
+    use super::ReadError;
+    let text = ReadError::read(path)?;
+    let mut lines: Vec<ScanLine> = Vec::new();
+    for (i, text) in text.lines().enumerate() {
+        if text.trim().is_empty() {
+            continue;
+        }
+        let line: ScanLine = serde_json::from_str(text)
+            .map_err(|e| ReadError::malformed(path, i + 1, format!("not a scan line: {e}")))?;
+        let numbers = [line.t, line.angle_min, line.angle_increment, line.range_max]
+            .into_iter()
+            .chain(line.ranges.iter().copied())
+            .chain(line.odometry)
+            .chain(line.laser_mount.into_iter().flatten())
+            .chain(line.laser_z)
+            .chain(line.laser_tilt)
+            .chain(line.head_pan)
+            .chain(line.head_tilt);
+        let mut numbers = numbers;
+        if numbers.any(|v| !v.is_finite()) {
+            return Err(ReadError::malformed(path, i + 1, "a number is not finite"));
+        }
+        if !(line.t >= 0.0 && line.t < 1e9 && line.range_max > 0.0 && line.range_max <= 65.0) {
+            return Err(ReadError::malformed(
+                path,
+                i + 1,
+                format!(
+                    "t must be in [0, 1e9) s and range_max in (0, 65] m, found t = {} and range_max = {}",
+                    line.t, line.range_max
+                ),
+            ));
+        }
+        if line.ranges.len() > 10_000 || line.ranges.iter().any(|&r| r < 0.0) {
+            return Err(ReadError::malformed(
+                path,
+                i + 1,
+                "ranges must be at most 10000 readings, none negative",
+            ));
+        }
+        if lines.last().is_some_and(|last| line.t < last.t) {
+            return Err(ReadError::malformed(path, i + 1, "time goes back"));
+        }
+        lines.push(line);
+    }
+    Ok(lines)
 }
 
 /// Writes one JSON object per scan.

@@ -20,3 +20,44 @@ pub fn write_tum(path: &Path, poses: impl Iterator<Item = (Stamp, Pose2)>) -> st
     }
     out.flush()
 }
+
+/// Reads a TUM file written by [`write_tum`] (or any tool: `t x y z qx qy qz qw`, `#` comments):
+/// the planar pose of each line, its heading from the quaternion about z.
+pub fn read_tum(path: &Path) -> Result<Vec<(Stamp, Pose2)>, super::ReadError> {
+    use super::ReadError;
+    let text = ReadError::read(path)?;
+    let mut poses: Vec<(Stamp, Pose2)> = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let bad = |what: &str| {
+            ReadError::malformed(
+                path,
+                i + 1,
+                format!(
+                    "{what}: expected `t x y z qx qy qz qw`, eight finite numbers, t >= 0 and increasing"
+                ),
+            )
+        };
+        let values: Vec<f64> = line
+            .split_whitespace()
+            .map(|v| v.parse::<f64>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| bad("not a number"))?;
+        if values.len() != 8 {
+            return Err(bad(&format!("{} fields", values.len())));
+        }
+        if values.iter().any(|v| !v.is_finite()) || !(0.0..1e9).contains(&values[0]) {
+            return Err(bad("out of range"));
+        }
+        let t = Stamp((values[0] * 1e9).round() as u64);
+        if poses.last().is_some_and(|(last, _)| t <= *last) {
+            return Err(bad("time goes back"));
+        }
+        let (qz, qw) = (values[6], values[7]);
+        poses.push((t, Pose2::new(values[1], values[2], 2.0 * qz.atan2(qw))));
+    }
+    Ok(poses)
+}

@@ -11,6 +11,7 @@
 //! horizontal ray never needs more: the level laser and the sonar cost what a 2D cast does. A
 //! tilted ray is also tested against the horizontal faces, the floor and the ceiling.
 
+use super::index::{SurfaceId, SurfaceIndex};
 use crate::config::{Material, Optics, WorldDescription};
 use parry2d::bounding_volume::BoundingVolume;
 use parry2d::math::Vector;
@@ -56,6 +57,21 @@ pub struct Face {
     pub material: Material,
 }
 
+impl Face {
+    /// Distance from `p` to the face in 3D, metres.
+    #[inline]
+    pub fn distance(&self, p: [f64; 3]) -> f64 {
+        self.distance2(p).sqrt()
+    }
+
+    /// Squared distance from `p` to the face in 3D, square metres.
+    #[inline]
+    pub fn distance2(&self, p: [f64; 3]) -> f64 {
+        let above = (self.z[0] - p[2]).max(p[2] - self.z[1]).max(0.0);
+        point_segment_distance2([p[0], p[1]], self.a, self.b) + above * above
+    }
+}
+
 /// A horizontal face: a polygon at height `z`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Cap {
@@ -97,6 +113,31 @@ impl PointKind {
     }
 }
 
+impl Cap {
+    /// Distance from `q` to the polygon in the plan: zero inside, metres.
+    pub fn plan_distance(&self, q: [f64; 2]) -> f64 {
+        if inside(&self.polygon, q) {
+            0.0
+        } else {
+            polygon_distance(&self.polygon, q)
+        }
+    }
+
+    /// Distance from `p` to the cap in 3D, metres.
+    #[inline]
+    pub fn distance(&self, p: [f64; 3]) -> f64 {
+        self.distance2(p).sqrt()
+    }
+
+    /// Squared distance from `p` to the cap in 3D, square metres.
+    #[inline]
+    pub fn distance2(&self, p: [f64; 3]) -> f64 {
+        let across = self.plan_distance([p[0], p[1]]);
+        let dz = p[2] - self.z;
+        across * across + dz * dz
+    }
+}
+
 /// Tolerance on heights when deciding whether a ray passes a face, metres.
 const Z_EPS: f64 = 1e-9;
 
@@ -110,6 +151,7 @@ pub struct WorldMap {
     normals: Vec<[f64; 2]>,
     caps: Vec<Cap>,
     ceiling: f64,
+    index: SurfaceIndex,
 }
 
 impl WorldMap {
@@ -164,6 +206,7 @@ impl WorldMap {
         WorldMap {
             optics: world.optics,
             tree,
+            index: SurfaceIndex::new(&faces, &caps),
             faces,
             normals,
             caps,
@@ -284,24 +327,19 @@ impl WorldMap {
             .fold(f64::INFINITY, f64::min)
     }
 
-    /// Distance from `point` to the nearest surface in 3D — faces, caps, floor and ceiling.
+    /// Distance from `p` to the nearest surface in 3D — faces, caps, floor and ceiling.
     pub fn distance_3d(&self, p: [f64; 3]) -> f64 {
-        let above = |z: f64, range: [f64; 2]| (range[0] - z).max(z - range[1]).max(0.0);
-        let faces = self
-            .faces
-            .iter()
-            .map(|f| point_segment_distance([p[0], p[1]], f.a, f.b).hypot(above(p[2], f.z)));
-        let caps = self.caps.iter().map(|c| {
-            let across = if inside(&c.polygon, [p[0], p[1]]) {
-                0.0
-            } else {
-                polygon_distance(&c.polygon, [p[0], p[1]])
-            };
-            across.hypot(p[2] - c.z)
-        });
-        faces
-            .chain(caps)
-            .fold(p[2].abs().min((self.ceiling - p[2]).abs()), f64::min)
+        self.nearest_surface(p).0
+    }
+
+    /// The surface nearest to `p` in 3D and its distance, through the plan's grid.
+    pub fn nearest_surface(&self, p: [f64; 3]) -> (f64, SurfaceId) {
+        self.index.nearest(p, &self.faces, &self.caps, self.ceiling)
+    }
+
+    /// The horizontal faces (tops and bottoms of boxes and tables).
+    pub fn caps(&self) -> &[Cap] {
+        &self.caps
     }
 }
 
@@ -394,6 +432,12 @@ fn polygon_distance(polygon: &[[f64; 2]], p: [f64; 2]) -> f64 {
 
 /// Distance from `p` to the segment `a`–`b`.
 pub fn point_segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+    point_segment_distance2(p, a, b).sqrt()
+}
+
+/// Squared distance from `p` to the segment `a`–`b`.
+#[inline]
+pub fn point_segment_distance2(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     let ab = [b[0] - a[0], b[1] - a[1]];
     let ap = [p[0] - a[0], p[1] - a[1]];
     let len2 = ab[0] * ab[0] + ab[1] * ab[1];
@@ -402,7 +446,8 @@ pub fn point_segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     } else {
         0.0
     };
-    (ap[0] - t * ab[0]).hypot(ap[1] - t * ab[1])
+    let (dx, dy) = (ap[0] - t * ab[0], ap[1] - t * ab[1]);
+    dx * dx + dy * dy
 }
 
 #[cfg(test)]

@@ -1,0 +1,225 @@
+//! Exact distances from a point to the world's surfaces, through a grid over the floor plan.
+//!
+//! Every per-point question about the truth — is this reading a ghost, how far is this vertex
+//! from the nearest wall — asks the same thing, often hundreds of thousands of times a run. The
+//! plan is cut into square cells; each cell lists the surfaces whose footprint (a vertical face's
+//! segment, a cap's polygon) comes within `reach` of it. A point's nearest surface among its
+//! cell's list, the floor and the ceiling is the true nearest whenever it is within `reach`: a
+//! surface that close in 3D is that close in the plan, so it is in the list. Farther points (a
+//! ghost behind glass, an outlier, a point off the plan) fall back to all surfaces.
+
+use super::map::{Cap, Face, point_segment_distance};
+
+/// Which surface a point is nearest to.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+pub enum SurfaceId {
+    /// A vertical face, by index in [`super::WorldMap::faces`].
+    Face(u32),
+    /// A horizontal cap (top or bottom of a box or table), by index.
+    Cap(u32),
+    /// The floor, z = 0.
+    Floor,
+    /// The ceiling.
+    Ceiling,
+}
+
+/// The grid over the plan and the surfaces near each cell.
+#[derive(Clone, Debug)]
+pub(super) struct SurfaceIndex {
+    origin: [f64; 2],
+    cell: f64,
+    size: [usize; 2],
+    /// For cell `k`, its surfaces are `items[starts[k]..starts[k + 1]]`.
+    starts: Vec<u32>,
+    items: Vec<SurfaceId>,
+    reach: f64,
+}
+
+/// Side of a cell and how far around it surfaces are listed, metres.
+const CELL: f64 = 0.25;
+const REACH: f64 = 0.25;
+/// At most this many cells: a world larger than this gets larger cells.
+const MAX_CELLS: f64 = 4.0e6;
+
+impl SurfaceIndex {
+    pub(super) fn new(faces: &[Face], caps: &[Cap]) -> Self {
+        let mut min = [f64::INFINITY; 2];
+        let mut max = [f64::NEG_INFINITY; 2];
+        let corners = faces
+            .iter()
+            .flat_map(|f| [f.a, f.b])
+            .chain(caps.iter().flat_map(|c| c.polygon.iter().copied()));
+        for p in corners {
+            for k in 0..2 {
+                min[k] = min[k].min(p[k]);
+                max[k] = max[k].max(p[k]);
+            }
+        }
+        if !min[0].is_finite() {
+            // No surface but the floor and the ceiling.
+            return SurfaceIndex {
+                origin: [0.0; 2],
+                cell: CELL,
+                size: [0, 0],
+                starts: vec![0],
+                items: Vec::new(),
+                reach: REACH,
+            };
+        }
+        let span = [max[0] - min[0], max[1] - min[1]];
+        let cell = CELL.max((span[0] * span[1] / MAX_CELLS).sqrt());
+        let size = [0, 1].map(|k| (span[k] / cell).floor() as usize + 1);
+        let mut lists: Vec<Vec<SurfaceId>> = vec![Vec::new(); size[0] * size[1]];
+        let cell_range = |lo: f64, hi: f64, k: usize| {
+            let a = ((lo - REACH - min[k]) / cell).floor().max(0.0) as usize;
+            let b = (((hi + REACH - min[k]) / cell).floor().max(0.0) as usize).min(size[k] - 1);
+            a..=b
+        };
+        // A cell lists a surface when the surface's footprint comes within `REACH` of the
+        // cell's square: the distance from the cell's centre is then within REACH plus half
+        // the cell's diagonal.
+        let half_diagonal = cell * std::f64::consts::FRAC_1_SQRT_2;
+        let centre = |i: usize, j: usize| {
+            [
+                min[0] + (i as f64 + 0.5) * cell,
+                min[1] + (j as f64 + 0.5) * cell,
+            ]
+        };
+        for (n, f) in faces.iter().enumerate() {
+            for i in cell_range(f.a[0].min(f.b[0]), f.a[0].max(f.b[0]), 0) {
+                for j in cell_range(f.a[1].min(f.b[1]), f.a[1].max(f.b[1]), 1) {
+                    if point_segment_distance(centre(i, j), f.a, f.b) <= REACH + half_diagonal {
+                        lists[j * size[0] + i].push(SurfaceId::Face(n as u32));
+                    }
+                }
+            }
+        }
+        for (n, c) in caps.iter().enumerate() {
+            let (lo, hi) = c.polygon.iter().fold(
+                ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
+                |(lo, hi), p| {
+                    (
+                        [lo[0].min(p[0]), lo[1].min(p[1])],
+                        [hi[0].max(p[0]), hi[1].max(p[1])],
+                    )
+                },
+            );
+            for i in cell_range(lo[0], hi[0], 0) {
+                for j in cell_range(lo[1], hi[1], 1) {
+                    if c.plan_distance(centre(i, j)) <= REACH + half_diagonal {
+                        lists[j * size[0] + i].push(SurfaceId::Cap(n as u32));
+                    }
+                }
+            }
+        }
+        let mut starts = Vec::with_capacity(lists.len() + 1);
+        let mut items = Vec::new();
+        starts.push(0);
+        for list in lists {
+            items.extend(list);
+            starts.push(items.len() as u32);
+        }
+        SurfaceIndex {
+            origin: min,
+            cell,
+            size,
+            starts,
+            items,
+            reach: REACH,
+        }
+    }
+
+    /// The surfaces listed for the cell holding `(x, y)`, or `None` off the grid.
+    #[inline]
+    fn near(&self, x: f64, y: f64) -> Option<&[SurfaceId]> {
+        let i = ((x - self.origin[0]) / self.cell).floor();
+        let j = ((y - self.origin[1]) / self.cell).floor();
+        if !(i >= 0.0 && j >= 0.0) {
+            return None;
+        }
+        let (i, j) = (i as usize, j as usize);
+        if i >= self.size[0] || j >= self.size[1] {
+            return None;
+        }
+        let k = j * self.size[0] + i;
+        Some(&self.items[self.starts[k] as usize..self.starts[k + 1] as usize])
+    }
+
+    /// The nearest surface to `p` and its distance, exactly.
+    pub(super) fn nearest(
+        &self,
+        p: [f64; 3],
+        faces: &[Face],
+        caps: &[Cap],
+        ceiling: f64,
+    ) -> (f64, SurfaceId) {
+        // Squared distances until the end: one square root per query.
+        let distance2 = |id: SurfaceId| match id {
+            SurfaceId::Face(n) => faces[n as usize].distance2(p),
+            SurfaceId::Cap(n) => caps[n as usize].distance2(p),
+            SurfaceId::Floor => p[2] * p[2],
+            SurfaceId::Ceiling => (ceiling - p[2]) * (ceiling - p[2]),
+        };
+        let mut best = (distance2(SurfaceId::Floor), SurfaceId::Floor);
+        let up = distance2(SurfaceId::Ceiling);
+        if up < best.0 {
+            best = (up, SurfaceId::Ceiling);
+        }
+        let consider = |best: &mut (f64, SurfaceId), id: SurfaceId| {
+            let d = distance2(id);
+            if d < best.0 {
+                *best = (d, id);
+            }
+        };
+        let mut exact = false;
+        if let Some(list) = self.near(p[0], p[1]) {
+            for &id in list {
+                consider(&mut best, id);
+            }
+            exact = best.0 <= self.reach * self.reach;
+        }
+        if !exact {
+            for n in 0..faces.len() {
+                consider(&mut best, SurfaceId::Face(n as u32));
+            }
+            for n in 0..caps.len() {
+                consider(&mut best, SurfaceId::Cap(n as u32));
+            }
+        }
+        (best.0.sqrt(), best.1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::config::WorldDescription;
+    use crate::world::WorldMap;
+    use rand::RngExt;
+
+    #[test]
+    fn the_grid_finds_the_same_nearest_distance_as_every_surface() {
+        let world = WorldDescription::load(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../worlds/lab.toml"),
+        )
+        .unwrap();
+        let map = WorldMap::new(&world);
+        let mut rng = crate::rng::stream(7, "test");
+        let (faces, caps) = (map.faces(), map.caps());
+        for _ in 0..20_000 {
+            // Points on and off the plan, near surfaces and far from them.
+            let p = [
+                rng.random::<f64>() * 20.0 - 2.0,
+                rng.random::<f64>() * 12.0 - 2.0,
+                rng.random::<f64>() * 3.4 - 0.4,
+            ];
+            let brute = faces
+                .iter()
+                .map(|f| f.distance2(p))
+                .chain(caps.iter().map(|c| c.distance2(p)))
+                .fold((p[2] * p[2]).min((map.ceiling() - p[2]).powi(2)), f64::min)
+                .sqrt();
+            let (d, _) = map.nearest_surface(p);
+            assert_eq!(d, brute, "at {p:?}");
+        }
+    }
+}
