@@ -64,8 +64,10 @@ scenarios! {
     scenario_lab_tour_thesis => "lab-tour-thesis.toml",
     scenario_orthogonal_doors => "orthogonal-doors.toml",
     scenario_pan_tilt_sweep => "pan-tilt-sweep.toml",
+    scenario_scene_lab => "scene-lab.toml",
     scenario_sonar_ring => "sonar-ring.toml",
     scenario_sonar_wall_approach => "sonar-wall-approach.toml",
+    scenario_survey_lab => "survey-lab.toml",
     scenario_tilted_scan => "tilted-scan.toml",
     scenario_wall_collision => "wall-collision.toml",
 }

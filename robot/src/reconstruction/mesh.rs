@@ -126,12 +126,66 @@ pub struct SceneMesh {
     pub quads: usize,
     /// Quadrilaterals the grid offers: `(rows − 1) × (cols − 1 − 2 trim)`.
     pub quads_possible: usize,
+    /// A unit normal per grid reading, facing the laser (see [`vertex_normals`]).
+    pub normals: Vec<[f32; 3]>,
 }
 
 impl SceneMesh {
     /// Triangles the grid offers: two per quadrilateral.
     pub fn triangles_possible(&self) -> usize {
         2 * self.quads_possible
+    }
+}
+
+/// One row of readings as three arrays of coordinates.
+struct Soa {
+    x: Vec<f32>,
+    y: Vec<f32>,
+    z: Vec<f32>,
+}
+
+impl Soa {
+    fn new(n: usize) -> Self {
+        Soa {
+            x: vec![0.0; n],
+            y: vec![0.0; n],
+            z: vec![0.0; n],
+        }
+    }
+
+    fn load(&mut self, row: &[[f32; 3]]) {
+        for (i, p) in row.iter().enumerate() {
+            self.x[i] = p[0];
+            self.y[i] = p[1];
+            self.z[i] = p[2];
+        }
+    }
+
+    /// `out[i]`: squared distance from reading `i` to reading `i + 1` of the same row.
+    fn along(&self, out: &mut [f32]) {
+        let n = self.x.len();
+        for (i, out) in out.iter_mut().enumerate().take(n.saturating_sub(1)) {
+            let (dx, dy, dz) = (
+                self.x[i + 1] - self.x[i],
+                self.y[i + 1] - self.y[i],
+                self.z[i + 1] - self.z[i],
+            );
+            *out = dx * dx + dy * dy + dz * dz;
+        }
+    }
+
+    /// `out[i]`: squared distance from reading `i` of this row to reading `i + shift` of
+    /// `next`.
+    fn across(&self, next: &Soa, shift: usize, out: &mut [f32]) {
+        let n = self.x.len().saturating_sub(shift);
+        for (i, out) in out.iter_mut().enumerate().take(n) {
+            let (dx, dy, dz) = (
+                next.x[i + shift] - self.x[i],
+                next.y[i + shift] - self.y[i],
+                next.z[i + shift] - self.z[i],
+            );
+            *out = dx * dx + dy * dy + dz * dz;
+        }
     }
 }
 
@@ -151,37 +205,96 @@ pub fn mesh_scene(scene: &Scene, options: &MeshOptions) -> SceneMesh {
         triangles: Vec::with_capacity(2 * rows * cols),
         quads: 0,
         quads_possible: rows.saturating_sub(1) * last.saturating_sub(first),
+        normals: Vec::new(),
     };
+    // Which neighbours the rule joins, for the vertex normals: 1.0 or 0.0 per grid reading for
+    // its edge to the next beam of its scan, and to the same beam of the next scan.
+    let mut joined_along = vec![0f32; rows * cols];
+    let mut joined_up = vec![0f32; rows * cols];
     if rows < 2 || last <= first {
+        out.normals = vertex_normals(scene, &joined_along, &joined_up);
         return out;
     }
     let p = &scene.points;
     match options.rule {
         MeshRule::Thesis { min_m, max_m } => {
             let (lo, hi) = (min_m * min_m, max_m * max_m);
-            let ok = |a: &[f32; 3], b: &[f32; 3]| {
-                let d = dist2(a, b);
-                // NaN (no return) fails both comparisons.
-                d >= lo && d <= hi
-            };
+            // NaN (no return) fails both comparisons.
+            let ok = |d: f32| (d >= lo) & (d <= hi);
+            // Squared distances along the rows, in columns and across the diagonals, a row
+            // pair at a time, in arrays the compiler can run several lanes at a time.
+            let mut rows_soa = [Soa::new(cols), Soa::new(cols)];
+            rows_soa[0].load(&p[..cols]);
+            let mut along = vec![0f32; cols];
+            rows_soa[0].along(&mut along);
+            for i in first..last {
+                joined_along[i] = f32::from(u8::from(ok(along[i])));
+            }
+            let mut along_next = vec![0f32; cols];
+            let (mut up, mut diagonal) = (vec![0f32; cols], vec![0f32; cols]);
             for j in 0..rows - 1 {
                 let origin = scene.origins[j];
-                for i in first..last {
-                    let (k00, k10) = (j * cols + i, j * cols + i + 1);
-                    let (k01, k11) = (k00 + cols, k10 + cols);
-                    let (v00, v10, v01, v11) = (&p[k00], &p[k10], &p[k01], &p[k11]);
-                    let a = ok(v00, v01) && ok(v00, v11);
-                    let b = ok(v11, v10) && ok(v11, v00);
-                    if a && ok(v00, v10) {
-                        out.quads += 1;
-                    }
-                    if a {
-                        out.triangles.push(facing(p, origin, [k00, k01, k11]));
-                    }
-                    if b {
-                        out.triangles.push(facing(p, origin, [k11, k10, k00]));
-                    }
+                let winding = row_winding(scene, j);
+                let (low, high) = rows_soa.split_at_mut(1);
+                let (a_row, b_row) = (&low[0], &mut high[0]);
+                b_row.load(&p[(j + 1) * cols..(j + 2) * cols]);
+                a_row.across(b_row, 0, &mut up);
+                a_row.across(b_row, 1, &mut diagonal);
+                b_row.along(&mut along_next);
+                let row = j * cols;
+                for i in first..=last {
+                    joined_up[row + i] = f32::from(u8::from(ok(up[i])));
                 }
+                for i in first..last {
+                    joined_along[row + cols + i] = f32::from(u8::from(ok(along_next[i])));
+                }
+                if winding.is_none() {
+                    // Rows that do not tell the winding: orient each triangle by its normal.
+                    for i in first..last {
+                        let (k00, k10) = (j * cols + i, j * cols + i + 1);
+                        let (k01, k11) = (k00 + cols, k10 + cols);
+                        let a = ok(up[i]) & ok(diagonal[i]);
+                        let b = ok(up[i + 1]) & ok(diagonal[i]);
+                        out.quads += usize::from(a & ok(along[i]));
+                        if a {
+                            out.triangles.push(facing(p, origin, [k00, k01, k11]));
+                        }
+                        if b {
+                            out.triangles.push(facing(p, origin, [k11, k10, k00]));
+                        }
+                    }
+                } else {
+                    // Without a branch per polygon: every triangle is written, and kept by
+                    // advancing the end past it only when valid.
+                    let rising = winding == Some(true);
+                    let mut n = out.triangles.len();
+                    out.triangles.resize(n + 2 * (last - first), [0; 3]);
+                    let tri = &mut out.triangles;
+                    for i in first..last {
+                        let (k00, k10) = ((j * cols + i) as u32, (j * cols + i + 1) as u32);
+                        let (k01, k11) = (k00 + cols as u32, k10 + cols as u32);
+                        // From v(i,j): up to v(i,j+1), across to v(i+1,j+1), along to v(i+1,j);
+                        // from v(i+1,j+1): down to v(i+1,j) (the next column's `up`).
+                        let a = ok(up[i]) & ok(diagonal[i]);
+                        let b = ok(up[i + 1]) & ok(diagonal[i]);
+                        out.quads += usize::from(a & ok(along[i]));
+                        tri[n] = if rising {
+                            [k00, k01, k11]
+                        } else {
+                            [k00, k11, k01]
+                        };
+                        n += usize::from(a);
+                        tri[n] = if rising {
+                            [k11, k10, k00]
+                        } else {
+                            [k11, k00, k10]
+                        };
+                        n += usize::from(b);
+                    }
+                    tri.truncate(n);
+                }
+                rows_soa.swap(0, 1);
+                std::mem::swap(&mut along, &mut along_next);
             }
         }
         MeshRule::Incidence {
@@ -216,26 +329,176 @@ pub fn mesh_scene(scene: &Scene, options: &MeshOptions) -> SceneMesh {
             };
             for j in 0..rows - 1 {
                 let origin = scene.origins[j];
+                let up = row_winding(scene, j);
                 for i in first..last {
                     let (k00, k10) = (j * cols + i, j * cols + i + 1);
                     let (k01, k11) = (k00 + cols, k10 + cols);
                     let diagonal = ok(k00, k11);
-                    let a = diagonal && ok(k00, k01) && ok(k01, k11);
-                    let b = diagonal && ok(k11, k10) && ok(k10, k00);
+                    let (left_up, right_up) = (ok(k00, k01), ok(k10, k11));
+                    let (bottom, top) = (ok(k00, k10), ok(k01, k11));
+                    joined_up[k00] = f32::from(u8::from(left_up));
+                    joined_up[k10] = f32::from(u8::from(right_up));
+                    joined_along[k00] = f32::from(u8::from(bottom));
+                    joined_along[k01] = f32::from(u8::from(top));
+                    let a = diagonal && left_up && top;
+                    let b = diagonal && right_up && bottom;
                     if a && b {
                         out.quads += 1;
                     }
                     if a {
-                        out.triangles.push(facing(p, origin, [k00, k01, k11]));
+                        out.triangles.push(wound(p, origin, [k00, k01, k11], up));
                     }
                     if b {
-                        out.triangles.push(facing(p, origin, [k11, k10, k00]));
+                        out.triangles.push(wound(p, origin, [k11, k10, k00], up));
                     }
                 }
             }
         }
     }
+    out.normals = vertex_normals(scene, &joined_along, &joined_up);
     out
+}
+
+/// A unit normal for every reading of the grid, facing the laser: the cross product of its
+/// differences along the scan and across the scans, each taken over the neighbours the mesh's
+/// rule joins to it (both sides: the central difference; one: forward or backward), so a
+/// normal never leans across a depth jump. A reading joined to no neighbour in one direction
+/// faces straight back to the laser. (The thesis gives quadrilaterals per-vertex normals from
+/// "that vertex and the next two": the one-sided difference.) Computed a row at a time on
+/// arrays of coordinates, several readings at once.
+pub fn vertex_normals(scene: &Scene, joined_along: &[f32], joined_up: &[f32]) -> Vec<[f32; 3]> {
+    let (rows, cols) = (scene.rows, scene.cols);
+    let p = &scene.points;
+    let mut normals = vec![[0f32; 3]; rows * cols];
+    if cols < 2 {
+        return normals;
+    }
+    // Rows as coordinate arrays with no-returns at zero: a neighbour's mask is zero whenever
+    // it did not return, and zero times a finite number is zero.
+    let load = |soa: &mut Soa, row: &[[f32; 3]]| {
+        for (i, q) in row.iter().enumerate() {
+            let r = if q[0].is_nan() { [0.0; 3] } else { *q };
+            soa.x[i] = r[0];
+            soa.y[i] = r[1];
+            soa.z[i] = r[2];
+        }
+    };
+    let mut soa = [Soa::new(cols), Soa::new(cols), Soa::new(cols)];
+    load(&mut soa[1], &p[..cols]);
+    let (mut dx, mut dy) = (Soa::new(cols), Soa::new(cols));
+    let zeros = vec![0f32; cols];
+    // The mask of the edge to the left of each reading: the previous reading's `along`.
+    let mut left = vec![0f32; cols];
+    for j in 0..rows {
+        let row = j * cols;
+        if j + 1 < rows {
+            load(&mut soa[2], &p[row + cols..row + 2 * cols]);
+        } else {
+            soa[2].x.fill(0.0);
+            soa[2].y.fill(0.0);
+            soa[2].z.fill(0.0);
+        }
+        let up = &joined_up[row..row + cols];
+        let down = if j > 0 {
+            &joined_up[row - cols..row]
+        } else {
+            &zeros[..]
+        };
+        let right = &joined_along[row..row + cols];
+        left[0] = 0.0;
+        left[1..].copy_from_slice(&right[..cols - 1]);
+        let (prev, cur, next) = (&soa[0], &soa[1], &soa[2]);
+        for (k, c, n, d, e) in [
+            (&prev.x, &cur.x, &next.x, &mut dx.x, &mut dy.x),
+            (&prev.y, &cur.y, &next.y, &mut dx.y, &mut dy.y),
+            (&prev.z, &cur.z, &next.z, &mut dx.z, &mut dy.z),
+        ] {
+            // Along the scan: m_right (c[i+1] − c[i]) + m_left (c[i] − c[i−1]).
+            d[0] = right[0] * (c[1] - c[0]);
+            d[cols - 1] = left[cols - 1] * (c[cols - 1] - c[cols - 2]);
+            for ((((d, r), l), w), (&cm, &cp)) in d[1..cols - 1]
+                .iter_mut()
+                .zip(&right[1..cols - 1])
+                .zip(&left[1..cols - 1])
+                .zip(&c[1..cols - 1])
+                .zip(c[..cols - 2].iter().zip(&c[2..]))
+            {
+                *d = r * (cp - w) + l * (w - cm);
+            }
+            // Across the scans: m_up (next − c) + m_down (c − prev).
+            for (((((e, u), dn), &w), &nx), &pv) in e
+                .iter_mut()
+                .zip(up)
+                .zip(down)
+                .zip(c.iter())
+                .zip(n.iter())
+                .zip(k.iter())
+            {
+                *e = u * (nx - w) + dn * (w - pv);
+            }
+        }
+        // Across the scans the rows rise (or fall) in the laser's view, along them the beams
+        // turn left: "across × along" faces the laser for rising rows.
+        let winding = row_winding(scene, j.min(rows.saturating_sub(2)));
+        let sign = if winding == Some(false) { -1.0 } else { 1.0 };
+        let o = scene.origins[j];
+        let out = &mut normals[row..row + cols];
+        for (i, out) in out.iter_mut().enumerate() {
+            let n = [
+                dy.y[i] * dx.z[i] - dy.z[i] * dx.y[i],
+                dy.z[i] * dx.x[i] - dy.x[i] * dx.z[i],
+                dy.x[i] * dx.y[i] - dy.y[i] * dx.x[i],
+            ];
+            let to_laser = [o[0] - cur.x[i], o[1] - cur.y[i], o[2] - cur.z[i]];
+            let length2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+            let back2 =
+                to_laser[0] * to_laser[0] + to_laser[1] * to_laser[1] + to_laser[2] * to_laser[2];
+            // Joined to nothing in one direction: face straight back to the laser.
+            let (a, b) = if length2 > 0.0 {
+                (sign / length2.sqrt(), 0.0)
+            } else {
+                (0.0, 1.0 / back2.sqrt())
+            };
+            *out = [0, 1, 2].map(|k| n[k] * a + to_laser[k] * b);
+        }
+        // Rows that do not tell (no tilt between them): face the laser by the dot product.
+        if winding.is_none() {
+            for (i, n) in out.iter_mut().enumerate() {
+                let to_laser = [o[0] - cur.x[i], o[1] - cur.y[i], o[2] - cur.z[i]];
+                if n[0] * to_laser[0] + n[1] * to_laser[1] + n[2] * to_laser[2] < 0.0 {
+                    *n = [-n[0], -n[1], -n[2]];
+                }
+            }
+        }
+        soa.rotate_left(1);
+    }
+    normals
+}
+
+/// How the triangles between rows `j` and `j + 1` are wound to face the laser: in the laser's
+/// view the beams run right to left along a row, so `v(i,j), v(i,j+1), v(i+1,j+1)` turns
+/// counter-clockwise when row `j + 1` lies above row `j` (the head tilted up between them) and
+/// clockwise when below. `None` when the rows do not tell (no tilt between them): each triangle
+/// is then oriented by its own normal.
+#[inline]
+fn row_winding(scene: &Scene, j: usize) -> Option<bool> {
+    let (f0, f1, up) = (
+        scene.forwards.get(j)?,
+        scene.forwards.get(j + 1)?,
+        scene.planes.get(j)?,
+    );
+    let rise = (f1[0] - f0[0]) * up[0] + (f1[1] - f0[1]) * up[1] + (f1[2] - f0[2]) * up[2];
+    (rise.abs() > 1e-6).then_some(rise > 0.0)
+}
+
+/// Triangle `t` (grid indices) wound as the rows say, or facing `origin` by its own normal.
+#[inline]
+fn wound(p: &[[f32; 3]], origin: [f32; 3], t: [usize; 3], up: Option<bool>) -> [u32; 3] {
+    match up {
+        Some(true) => t.map(|k| k as u32),
+        Some(false) => [t[0] as u32, t[2] as u32, t[1] as u32],
+        None => facing(p, origin, t),
+    }
 }
 
 /// The triangle `t` wound counter-clockwise as seen from `origin` (its normal towards it).
@@ -301,6 +564,9 @@ mod tests {
             cols,
             points,
             origins: vec![[0.0, 0.0, 0.0]; rows],
+            // The rows rise: each one's middle beam a little higher than the last.
+            forwards: (0..rows).map(|j| [1.0, 0.0, 0.01 * j as f32]).collect(),
+            planes: vec![[0.0, 0.0, 1.0]; rows],
             base: Pose2::IDENTITY,
             pan: 0.0,
             skipped: 0,

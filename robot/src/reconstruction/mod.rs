@@ -48,7 +48,9 @@ mod model;
 mod placement;
 mod scene;
 
-pub use mesh::{MeshOptions, MeshRule, SceneMesh, mesh_scene, normal, triangle_area};
+pub use mesh::{
+    MeshOptions, MeshRule, SceneMesh, mesh_scene, normal, triangle_area, vertex_normals,
+};
 pub use model::{Model, SceneStats};
 pub use placement::EstimatePlacement;
 pub use scene::{Scene, SceneError, SceneScan};

@@ -2,7 +2,7 @@
 //! mesh, in the world frame (thesis §5.3.2–5.3.3). As in the thesis the scenes are placed side by
 //! side — each by the base pose at its scans — and overlaid, not fused.
 
-use super::mesh::{MeshOptions, SceneMesh, mesh_scene, normal, triangle_area};
+use super::mesh::{MeshOptions, SceneMesh, mesh_scene, triangle_area};
 use super::scene::Scene;
 use crate::control::SceneTag;
 use crate::geometry::Pose2;
@@ -31,8 +31,8 @@ pub struct SceneStats {
 pub struct Model {
     /// The readings that returned.
     pub vertices: Vec<[f32; 3]>,
-    /// A unit normal per vertex: the area-weighted mean of its triangles' normals, or the
-    /// direction back to the laser for a vertex in no triangle.
+    /// A unit normal per vertex, facing the laser that saw it
+    /// ([`vertex_normals`](super::mesh::vertex_normals)).
     pub normals: Vec<[f32; 3]>,
     /// Which scene (index into `scenes`) each vertex comes from.
     pub vertex_scene: Vec<u16>,
@@ -56,59 +56,38 @@ impl Model {
     /// Adds one meshed scene.
     pub fn add(&mut self, scene: &Scene, mesh: &SceneMesh) {
         let index = self.scenes.len() as u16;
-        let offset = self.vertices.len() as u32;
-        // Grid cell → vertex, for the readings that returned.
-        let mut remap = vec![u32::MAX; scene.points.len()];
-        let mut next = offset;
-        for (k, p) in scene.points.iter().enumerate() {
-            if !p[0].is_nan() {
+        let p = &scene.points;
+        // The readings that returned become vertices, in grid order.
+        let offset = self.vertices.len();
+        let mut remap = vec![u32::MAX; p.len()];
+        let mut next = offset as u32;
+        for (k, point) in p.iter().enumerate() {
+            if !point[0].is_nan() {
                 remap[k] = next;
                 next += 1;
-                self.vertices.push(*p);
-                self.vertex_scene.push(index);
             }
         }
-        let first_triangle = self.triangles.len();
+        let added = next as usize - offset;
+        self.vertices
+            .extend(p.iter().filter(|point| !point[0].is_nan()));
+        self.vertex_scene.resize(offset + added, index);
         self.triangles
             .extend(mesh.triangles.iter().map(|t| t.map(|k| remap[k as usize])));
-        // Normals: area-weighted sums of the triangles around each vertex…
-        let mut sums = vec![[0f32; 3]; (next - offset) as usize];
-        for t in &self.triangles[first_triangle..] {
-            let v = &self.vertices;
-            let n = normal(&v[t[0] as usize], &v[t[1] as usize], &v[t[2] as usize]);
-            for &k in t {
-                let s = &mut sums[(k - offset) as usize];
-                s[0] += n[0];
-                s[1] += n[1];
-                s[2] += n[2];
-            }
-        }
-        // …or, alone, the way back to the laser.
-        for (k, p) in scene.points.iter().enumerate() {
-            let v = remap[k];
-            if v == u32::MAX {
-                continue;
-            }
-            let s = &mut sums[(v - offset) as usize];
-            if s[0] == 0.0 && s[1] == 0.0 && s[2] == 0.0 {
-                let o = scene.origins[k / scene.cols];
-                *s = [o[0] - p[0], o[1] - p[1], o[2] - p[2]];
-            }
-        }
-        self.normals.extend(sums.iter().map(|s| {
-            let n = (s[0] * s[0] + s[1] * s[1] + s[2] * s[2]).sqrt();
-            if n > 0.0 {
-                [s[0] / n, s[1] / n, s[2] / n]
-            } else {
-                [0.0, 0.0, 1.0]
-            }
-        }));
+        // The normals of the readings that returned.
+        self.normals.extend(
+            scene
+                .points
+                .iter()
+                .zip(&mesh.normals)
+                .filter(|(point, _)| !point[0].is_nan())
+                .map(|(_, n)| *n),
+        );
         self.scenes.push(SceneStats {
             tag: scene.tag,
             base: scene.base,
             pan: scene.pan,
             scans: scene.rows,
-            points: (next - offset) as usize,
+            points: added,
             quads: (mesh.quads, mesh.quads_possible),
             triangles: (mesh.triangles.len(), mesh.triangles_possible()),
         });

@@ -76,6 +76,10 @@ pub struct Scene {
     pub points: Vec<[f32; 3]>,
     /// Each row's laser optical centre, world frame, metres: where the readings were seen from.
     pub origins: Vec<[f32; 3]>,
+    /// Each row's middle beam direction, world frame (unit).
+    pub forwards: Vec<[f32; 3]>,
+    /// Each row's scan-plane normal, world frame (unit): the laser's z axis.
+    pub planes: Vec<[f32; 3]>,
     /// The base's pose at the first scan.
     pub base: Pose2,
     /// The head's pan at the first scan, radians (0 for a fixed laser).
@@ -95,8 +99,11 @@ impl Scene {
         let cols = first.scan.len();
         let (angle_min, increment) = (first.scan.angle_min, first.scan.angle_increment);
         // The beams' directions in the laser's plane, once for the scene.
-        let trig: Vec<(f64, f64)> = (0..cols)
-            .map(|i| (angle_min + i as f64 * increment).sin_cos())
+        let trig: Vec<(f32, f32)> = (0..cols)
+            .map(|i| {
+                let (s, c) = (angle_min + i as f64 * increment).sin_cos();
+                (s as f32, c as f32)
+            })
             .collect();
         let mut scene = Scene {
             tag,
@@ -104,6 +111,8 @@ impl Scene {
             cols,
             points: Vec::with_capacity(scans.len() * cols),
             origins: Vec::with_capacity(scans.len()),
+            forwards: Vec::with_capacity(scans.len()),
+            planes: Vec::with_capacity(scans.len()),
             base: first.base,
             pan: first.scan.head.map_or(0.0, |h| h.pan),
             skipped: scans.len(),
@@ -124,19 +133,29 @@ impl Scene {
                 });
             }
             let r = laser.rotation();
-            let o = laser.origin();
-            let forward = [r[0][0], r[1][0], r[2][0]];
-            let left = [r[0][1], r[1][1], r[2][1]];
-            for (&mm, &(s, c)) in scan.ranges_mm.iter().zip(&trig) {
-                scene.points.push(if mm == 0 || mm >= scan.range_max_mm {
-                    [f32::NAN; 3]
-                } else {
-                    let d = f64::from(mm) * 1e-3;
-                    let (a, b) = (d * c, d * s);
-                    [0, 1, 2].map(|k| (o[k] + a * forward[k] + b * left[k]) as f32)
-                });
-            }
-            scene.origins.push(o.map(|v| v as f32));
+            let column = |c: usize| [r[0][c] as f32, r[1][c] as f32, r[2][c] as f32];
+            let (forward, left, plane) = (column(0), column(1), column(2));
+            let o = laser.origin().map(|v| v as f32);
+            let max = scan.range_max_mm;
+            // Single precision: millimetre readings over tens of metres keep micrometres.
+            scene
+                .points
+                .extend(scan.ranges_mm.iter().zip(&trig).map(|(&mm, &(s, c))| {
+                    if mm == 0 || mm >= max {
+                        [f32::NAN; 3]
+                    } else {
+                        let d = f32::from(mm) * 1e-3;
+                        let (a, b) = (d * c, d * s);
+                        [
+                            o[0] + a * forward[0] + b * left[0],
+                            o[1] + a * forward[1] + b * left[1],
+                            o[2] + a * forward[2] + b * left[2],
+                        ]
+                    }
+                }));
+            scene.origins.push(o);
+            scene.forwards.push(forward);
+            scene.planes.push(plane);
             scene.rows += 1;
         }
         scene.skipped -= scene.rows;

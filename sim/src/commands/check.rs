@@ -6,7 +6,8 @@
 //! `cargo test`.
 
 use crate::config::Scenario;
-use crate::config::checks::{Check, CheckKind};
+use crate::config::checks::{Check, CheckKind, ModelPlacement};
+use crate::record::Placement;
 use crate::record::RunRecord;
 use crate::world::PointKind;
 use crate::world::WorldMap;
@@ -207,6 +208,80 @@ fn evaluate_one(
                 share,
                 format!("{share:.4} ({near} of {} map points)", loc.map.len()),
             )
+        }
+        kind @ (CheckKind::PointError(_)
+        | CheckKind::PointErrorP95(_)
+        | CheckKind::PhantomArea(_)
+        | CheckKind::Coverage(_)
+        | CheckKind::ValidShare
+        | CheckKind::SeamError(_)) => {
+            let wanted = kind.model().expect("a model check");
+            let Some(recon) = &record.reconstruction else {
+                return outcome(
+                    "no 3D model".into(),
+                    "`scene` or `survey` steps".into(),
+                    false,
+                );
+            };
+            let placed = match wanted {
+                ModelPlacement::Main => Some(recon.main()),
+                ModelPlacement::Estimate => recon.placed(Placement::Estimate),
+                ModelPlacement::Odometry => recon.placed(Placement::Odometry),
+                ModelPlacement::Truth => recon.placed(Placement::Truth),
+            };
+            let Some(placed) = placed else {
+                return outcome(
+                    "no such model".into(),
+                    format!("a model placed by {wanted:?}"),
+                    false,
+                );
+            };
+            let which = placed.placement.name();
+            if *kind == CheckKind::ValidShare {
+                let (_, (valid, of)) = placed.model.counts();
+                let share = valid as f64 / of.max(1) as f64;
+                return single(
+                    share,
+                    format!("{share:.4} ({valid} of {of} triangles, {which})"),
+                );
+            }
+            let Some(a) = &placed.accuracy else {
+                return outcome("no score".into(), "the world's truth".into(), false);
+            };
+            match kind {
+                CheckKind::PointError(_) => {
+                    single(a.median_m, format!("{:.4} m (median, {which})", a.median_m))
+                }
+                CheckKind::PointErrorP95(_) => single(
+                    a.p95_m,
+                    format!("{:.4} m (95th percentile, {which})", a.p95_m),
+                ),
+                CheckKind::PhantomArea(_) => single(
+                    a.phantom_area_m2,
+                    format!(
+                        "{:.3} m² of {:.1} m² ({which})",
+                        a.phantom_area_m2, a.mesh_area_m2
+                    ),
+                ),
+                CheckKind::Coverage(_) => single(
+                    a.coverage,
+                    format!("{:.4} of {:.1} m² ({which})", a.coverage, a.surface_area_m2),
+                ),
+                _ => match a.seam_m {
+                    Some(seam) => single(
+                        seam,
+                        format!(
+                            "{seam:.4} m ({} of {} vertices overlapped, {which})",
+                            a.seam_pairs.1, a.seam_pairs.0
+                        ),
+                    ),
+                    None => outcome(
+                        "no overlap between stations".into(),
+                        format!("{}{unit}", check.bounds),
+                        false,
+                    ),
+                },
+            }
         }
         CheckKind::SonarError { transducers } => {
             let Some(sonar) = &record.sonar else {

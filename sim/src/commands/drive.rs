@@ -3,6 +3,7 @@
 //! writing the same kind of outputs. There is no ground truth out there, so the picture compares
 //! the map placed by odometry with the map placed by scan matching (as `twin map` does).
 
+use super::reconstruct::{SceneInput, reconstruct};
 use crate::config::Scenario;
 use crate::output::logmap::{Panel, occupied_cells, write_log_map_svg};
 use crate::output::{ScanLine, write_scan_lines, write_tum};
@@ -36,6 +37,9 @@ pub struct DriveRecord {
     pub end: Stamp,
     /// Wall-clock seconds the drive took.
     pub wall_seconds: f64,
+    /// The 3D models of the scenes, when the script took any (no truth out there: placed by
+    /// the estimate and by odometry, not scored).
+    pub reconstruction: Option<crate::record::Reconstruction>,
 }
 
 /// Why a drive stopped.
@@ -50,6 +54,9 @@ pub enum DriveError<E: HardwareError> {
     /// The head was still moving after the polls allowed.
     #[error("pan-tilt: the head was still moving after {0} polls")]
     HeadStuck(u32),
+    /// The scenes' scans cannot be made into a 3D model.
+    #[error("3D reconstruction: {0}")]
+    Reconstruction(robot::reconstruction::SceneError),
 }
 
 /// Ticks between two status polls while the head moves, and how many polls a move may take.
@@ -119,6 +126,31 @@ where
         let (placed, map) = localiser.finish();
         (kind, placed, map)
     });
+    let mount = scenario.robot.mount();
+    let inputs: Vec<SceneInput> = scans
+        .iter()
+        .filter_map(
+            |(scan, odometry, scene): &(LaserScan, Pose2, Option<SceneTag>)| {
+                Some(SceneInput {
+                    tag: (*scene)?,
+                    scan: scan.clone(),
+                    laser: mount.laser_on_base(scan.head),
+                    odometry: *odometry,
+                    truth: None,
+                })
+            },
+        )
+        .collect();
+    let reconstruction = reconstruct(
+        &inputs,
+        localisation
+            .as_ref()
+            .map(|(_, placed, _)| placed.as_slice()),
+        &scenario.reconstruction.mesh,
+        None,
+        false,
+    )
+    .map_err(DriveError::Reconstruction)?;
     Ok(DriveRecord {
         scenario: scenario.name.clone(),
         steps: report.steps,
@@ -128,6 +160,7 @@ where
         pan_tilt,
         localisation,
         wall_seconds: started.elapsed().as_secs_f64(),
+        reconstruction,
     })
 }
 
@@ -258,6 +291,14 @@ pub fn write_drive(
     let mut text = serde_json::to_string_pretty(&summary)?;
     text.push('\n');
     std::fs::write(file("summary.json"), text)?;
+    if let Some(recon) = &record.reconstruction {
+        files.extend(crate::output::write_reconstruction(
+            dir,
+            recon,
+            &record.scenario,
+            None,
+        )?);
+    }
     Ok(files)
 }
 
@@ -383,6 +424,9 @@ pub fn main(args: DriveArgs) -> Result<(), super::CommandError> {
                 e.y,
                 e.theta.to_degrees()
             );
+        }
+        if let Some(recon) = &record.reconstruction {
+            print!("{}", crate::output::reconstruction_report(recon));
         }
         println!("wrote {}", dir.display());
         for f in &files {

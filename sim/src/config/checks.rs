@@ -36,11 +36,37 @@ pub enum CheckKind {
     },
     /// Length of the true path, metres.
     DistanceTravelled,
+    /// Median distance (m) of the 3D model's vertices to the nearest true surface.
+    PointError(ModelPlacement),
+    /// 95th percentile of that distance, metres.
+    PointErrorP95(ModelPlacement),
+    /// Mesh area farther than 5 cm from every true surface, square metres.
+    PhantomArea(ModelPlacement),
+    /// Share of the true wall, box and table area within 5 cm of a vertex.
+    Coverage(ModelPlacement),
+    /// Share of the triangles the scenes' grids offer that the validity rule keeps.
+    ValidShare,
+    /// Median distance (m) between the meshes of two stations where they overlap.
+    SeamError(ModelPlacement),
+}
+
+/// Which of a run's 3D models a check measures.
+#[derive(Copy, Clone, Debug, Default, PartialEq, Eq)]
+pub enum ModelPlacement {
+    /// The main model: placed by the estimate if the run localised, else by odometry.
+    #[default]
+    Main,
+    /// Placed by the 2D localisation's estimate.
+    Estimate,
+    /// Placed by odometry.
+    Odometry,
+    /// Placed by the twin's truth.
+    Truth,
 }
 
 impl CheckKind {
     /// The names accepted in `kind = "…"`.
-    pub const NAMES: [&'static str; 10] = [
+    pub const NAMES: [&'static str; 16] = [
         "final_estimate_error",
         "rms_estimate_error",
         "odometry_drift",
@@ -51,6 +77,12 @@ impl CheckKind {
         "map_quality",
         "sonar_error",
         "distance_travelled",
+        "point_error",
+        "point_error_p95",
+        "phantom_area",
+        "coverage",
+        "valid_share",
+        "seam_error",
     ];
 
     /// The name used in files and reports.
@@ -66,6 +98,25 @@ impl CheckKind {
             CheckKind::MapQuality => "map_quality",
             CheckKind::SonarError { .. } => "sonar_error",
             CheckKind::DistanceTravelled => "distance_travelled",
+            CheckKind::PointError(_) => "point_error",
+            CheckKind::PointErrorP95(_) => "point_error_p95",
+            CheckKind::PhantomArea(_) => "phantom_area",
+            CheckKind::Coverage(_) => "coverage",
+            CheckKind::ValidShare => "valid_share",
+            CheckKind::SeamError(_) => "seam_error",
+        }
+    }
+
+    /// The 3D model the check measures, if it measures one.
+    pub fn model(&self) -> Option<ModelPlacement> {
+        match *self {
+            CheckKind::PointError(p)
+            | CheckKind::PointErrorP95(p)
+            | CheckKind::PhantomArea(p)
+            | CheckKind::Coverage(p)
+            | CheckKind::SeamError(p) => Some(p),
+            CheckKind::ValidShare => Some(ModelPlacement::Main),
+            _ => None,
         }
     }
 
@@ -76,9 +127,17 @@ impl CheckKind {
             | CheckKind::RmsEstimateError
             | CheckKind::OdometryDrift
             | CheckKind::SonarError { .. }
-            | CheckKind::DistanceTravelled => " m",
+            | CheckKind::DistanceTravelled
+            | CheckKind::PointError(_)
+            | CheckKind::PointErrorP95(_)
+            | CheckKind::SeamError(_) => " m",
+            CheckKind::PhantomArea(_) => " m²",
             CheckKind::Collisions | CheckKind::Scans => "",
-            CheckKind::OutlierShare | CheckKind::NoReturnShare | CheckKind::MapQuality => "",
+            CheckKind::OutlierShare
+            | CheckKind::NoReturnShare
+            | CheckKind::MapQuality
+            | CheckKind::Coverage(_)
+            | CheckKind::ValidShare => "",
         }
     }
 }
@@ -132,6 +191,7 @@ pub(super) fn parse_checks(
     source: &Source,
     localises: bool,
     fires_sonar: bool,
+    takes_scenes: bool,
 ) -> Result<Vec<Check>, ConfigError> {
     let mut checks = Vec::new();
     for (i, spanned) in files.iter().enumerate() {
@@ -139,7 +199,27 @@ pub(super) fn parse_checks(
         let field = |name: &str| Some(format!("check[{i}].{name}"));
         let error =
             |name: &str, message: String| source.error(spanned.span(), field(name), message);
+        let placement = match f.placement.as_deref() {
+            None => ModelPlacement::Main,
+            Some("estimate") => ModelPlacement::Estimate,
+            Some("odometry") => ModelPlacement::Odometry,
+            Some("truth") => ModelPlacement::Truth,
+            Some(other) => {
+                return Err(error(
+                    "placement",
+                    format!(
+                        "unknown placement {other:?}: expected \"estimate\", \"odometry\" or \"truth\""
+                    ),
+                ));
+            }
+        };
         let kind = match f.kind.as_str() {
+            "point_error" => CheckKind::PointError(placement),
+            "point_error_p95" => CheckKind::PointErrorP95(placement),
+            "phantom_area" => CheckKind::PhantomArea(placement),
+            "coverage" => CheckKind::Coverage(placement),
+            "valid_share" => CheckKind::ValidShare,
+            "seam_error" => CheckKind::SeamError(placement),
             "final_estimate_error" => CheckKind::FinalEstimateError,
             "rms_estimate_error" => CheckKind::RmsEstimateError,
             "odometry_drift" => CheckKind::OdometryDrift,
@@ -162,19 +242,24 @@ pub(super) fn parse_checks(
                 ));
             }
         };
-        // Which bounds each kind takes: metres, degrees, counts or shares.
-        let (metres, degrees, counts, shares) = match kind {
+        // Which bounds each kind takes: metres, degrees, counts, shares or square metres.
+        let (metres, degrees, counts, shares, areas) = match kind {
             CheckKind::FinalEstimateError | CheckKind::RmsEstimateError => {
-                (true, true, false, false)
+                (true, true, false, false, false)
             }
-            CheckKind::OdometryDrift => (true, true, false, false),
-            CheckKind::SonarError { .. } | CheckKind::DistanceTravelled => {
-                (true, false, false, false)
-            }
-            CheckKind::Collisions | CheckKind::Scans => (false, false, true, false),
-            CheckKind::OutlierShare | CheckKind::NoReturnShare | CheckKind::MapQuality => {
-                (false, false, false, true)
-            }
+            CheckKind::OdometryDrift => (true, true, false, false, false),
+            CheckKind::SonarError { .. }
+            | CheckKind::DistanceTravelled
+            | CheckKind::PointError(_)
+            | CheckKind::PointErrorP95(_)
+            | CheckKind::SeamError(_) => (true, false, false, false, false),
+            CheckKind::Collisions | CheckKind::Scans => (false, false, true, false, false),
+            CheckKind::OutlierShare
+            | CheckKind::NoReturnShare
+            | CheckKind::MapQuality
+            | CheckKind::Coverage(_)
+            | CheckKind::ValidShare => (false, false, false, true, false),
+            CheckKind::PhantomArea(_) => (false, false, false, false, true),
         };
         let given = [
             (
@@ -192,6 +277,11 @@ pub(super) fn parse_checks(
                 "min_share / max_share",
                 f.min_share.is_some() || f.max_share.is_some(),
                 shares,
+            ),
+            (
+                "min_m2 / max_m2",
+                f.min_m2.is_some() || f.max_m2.is_some(),
+                areas,
             ),
         ];
         for (name, present, allowed) in given {
@@ -219,7 +309,28 @@ pub(super) fn parse_checks(
                 "only a `sonar_error` check names transducers".into(),
             ));
         }
+        if f.placement.is_some()
+            && !matches!(
+                kind,
+                CheckKind::PointError(_)
+                    | CheckKind::PointErrorP95(_)
+                    | CheckKind::PhantomArea(_)
+                    | CheckKind::Coverage(_)
+                    | CheckKind::SeamError(_)
+            )
+        {
+            return Err(error(
+                "placement",
+                format!("a `{}` check takes no placement", f.kind),
+            ));
+        }
         let needs = match kind {
+            _ if kind.model().is_some() && !takes_scenes => {
+                Some("`scene` or `survey` steps in the script (the 3D model it measures)")
+            }
+            _ if kind.model() == Some(ModelPlacement::Estimate) && !localises => {
+                Some("a [localisation] table (the model placed by the estimate)")
+            }
             CheckKind::FinalEstimateError | CheckKind::RmsEstimateError | CheckKind::MapQuality
                 if !localises =>
             {
@@ -243,6 +354,11 @@ pub(super) fn parse_checks(
                 min: f.min_share,
                 max: f.max_share,
             }
+        } else if areas {
+            Bounds {
+                min: f.min_m2,
+                max: f.max_m2,
+            }
         } else {
             Bounds {
                 min: f.min_m,
@@ -258,6 +374,8 @@ pub(super) fn parse_checks(
             f.max,
             f.min_share,
             f.max_share,
+            f.min_m2,
+            f.max_m2,
         ];
         if all.iter().flatten().any(|v| !v.is_finite() || *v < 0.0) {
             return Err(error(
@@ -291,6 +409,9 @@ pub(super) struct CheckFile {
     max: Option<f64>,
     min_share: Option<f64>,
     max_share: Option<f64>,
+    min_m2: Option<f64>,
+    max_m2: Option<f64>,
+    placement: Option<String>,
     transducers: Option<Vec<u8>>,
     note: Option<String>,
 }

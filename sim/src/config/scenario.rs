@@ -214,7 +214,7 @@ impl Scenario {
                 format!("expected 1..=10000 repetitions, found {repeat}"),
             ));
         }
-        let steps = (0..repeat).flat_map(|_| once.iter().copied()).collect();
+        let steps: Vec<Step> = (0..repeat).flat_map(|_| once.iter().copied()).collect();
         let mut tour = TourConfig::default();
         if let Some(t) = &file.tour {
             let poll = Duration::from_secs_f64(t.poll_s.map_or(0.05, Positive::get));
@@ -363,6 +363,9 @@ impl Scenario {
             &source,
             localisation.is_some(),
             sonar.is_some(),
+            steps
+                .iter()
+                .any(|s| matches!(s, Step::Scene { .. } | Step::Survey { .. })),
         )?;
         Ok(Scenario {
             name: file.name,

@@ -132,12 +132,16 @@ impl SurfaceIndex {
     /// The surfaces listed for the cell holding `(x, y)`, or `None` off the grid.
     #[inline]
     fn near(&self, x: f64, y: f64) -> Option<&[SurfaceId]> {
-        let i = ((x - self.origin[0]) / self.cell).floor();
-        let j = ((y - self.origin[1]) / self.cell).floor();
-        if !(i >= 0.0 && j >= 0.0) {
+        // Off the grid below its origin (or NaN): no list. Above, truncation is the floor
+        // (and cheaper than `f64::floor` without SSE4.1).
+        let (u, v) = (
+            (x - self.origin[0]) / self.cell,
+            (y - self.origin[1]) / self.cell,
+        );
+        if !(u >= 0.0 && v >= 0.0) {
             return None;
         }
-        let (i, j) = (i as usize, j as usize);
+        let (i, j) = (u as usize, v as usize);
         if i >= self.size[0] || j >= self.size[1] {
             return None;
         }

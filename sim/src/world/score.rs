@@ -15,10 +15,9 @@
 
 use super::index::SurfaceId;
 use super::map::WorldMap;
+use crate::config::Material;
 use robot::reconstruction::{Model, triangle_area};
 use serde::Serialize;
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
 
 /// A vertex within this of a surface lies on it; a triangle farther is a phantom, metres.
 pub const ON_SURFACE: f64 = 0.05;
@@ -56,6 +55,10 @@ pub struct Accuracy {
     pub surface_area_m2: f64,
     /// Share of it within 5 cm of a vertex.
     pub coverage: f64,
+    /// The same by material: `matte`, `black`, `glass`, `metal` (share, and true area in m²),
+    /// for the materials the world has. Black surfaces lost at oblique incidence and glass seen
+    /// through show here as holes.
+    pub coverage_by_material: Vec<(String, f64, f64)>,
     /// Median seam error between stations, metres (`None` with one station or no overlap).
     pub seam_m: Option<f64>,
     /// Vertices of later stations compared for the seam, and how many found an earlier reading
@@ -87,7 +90,7 @@ pub fn score_with(model: &Model, map: &WorldMap, nearest: &[(f64, SurfaceId)]) -
     let p95_m = quantile(&mut distances, 0.95);
     let phantom = phantom_area(model, map, nearest);
     let (mesh_area, phantom_area) = (phantom.mesh_m2, phantom.phantom_m2);
-    let (surface_area_m2, coverage) = coverage(model, map, nearest);
+    let (surface_area_m2, coverage, coverage_by_material) = coverage(model, map, nearest);
     let (seam_m, seam_pairs) = seam(model);
     let share = |count: f64| if n > 0 { count / n as f64 } else { 0.0 };
     Accuracy {
@@ -107,6 +110,7 @@ pub fn score_with(model: &Model, map: &WorldMap, nearest: &[(f64, SurfaceId)]) -
         ghost_area_m2: phantom.ghost_m2,
         surface_area_m2,
         coverage,
+        coverage_by_material,
         seam_m,
         seam_pairs,
     }
@@ -188,17 +192,13 @@ impl Cells {
 
     /// Marks the cells whose centres lie within `r` of `(u, v)` (surface coordinates).
     fn mark(&mut self, u: f64, v: f64, r: f64) {
+        // The cells whose centres (i + ½) · cell can lie within r of x: a superset, the
+        // distance test below decides. Truncation of non-negative numbers is their floor, and
+        // cheaper than `f64::floor` without SSE4.1.
         let range = |x: f64, n: usize| {
-            let lo = ((x - r) / COVERAGE_CELL - 0.5).ceil().max(0.0) as usize;
-            let hi = ((x + r) / COVERAGE_CELL - 0.5).floor();
-            (
-                lo,
-                if hi < 0.0 {
-                    0
-                } else {
-                    (hi as usize + 1).min(n)
-                },
-            )
+            let lo = ((x - r) / COVERAGE_CELL - 0.5).max(0.0) as usize;
+            let hi = ((x + r) / COVERAGE_CELL + 0.5).max(0.0) as usize;
+            (lo, hi.min(n))
         };
         let (i0, i1) = range(u, self.size[0]);
         let (j0, j1) = range(v, self.size[1]);
@@ -227,8 +227,12 @@ impl Cells {
     }
 }
 
-/// True wall, box and table area and the share of it within 5 cm of a vertex.
-fn coverage(model: &Model, map: &WorldMap, nearest: &[(f64, SurfaceId)]) -> (f64, f64) {
+/// What [`coverage`] finds.
+type CoverageFigures = (f64, f64, Vec<(String, f64, f64)>);
+
+/// True wall, box and table area, the share of it within 5 cm of a vertex, and the same by
+/// material.
+fn coverage(model: &Model, map: &WorldMap, nearest: &[(f64, SurfaceId)]) -> CoverageFigures {
     let cells_along = |length: f64| (length / COVERAGE_CELL).ceil().max(1.0) as usize;
     let mut faces: Vec<Cells> = map
         .faces()
@@ -296,47 +300,159 @@ fn coverage(model: &Model, map: &WorldMap, nearest: &[(f64, SurfaceId)]) -> (f64
             SurfaceId::Floor | SurfaceId::Ceiling => {}
         }
     }
-    let (covered, total) = faces
+    let materials = map
+        .faces()
         .iter()
-        .chain(&caps)
-        .map(Cells::counts)
-        .fold((0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+        .map(|f| f.material)
+        .chain(map.caps().iter().map(|c| c.material));
+    let mut by_material: Vec<(Material, usize, usize)> =
+        Material::ALL.iter().map(|&m| (m, 0, 0)).collect();
+    for (cells, material) in faces.iter().chain(&caps).zip(materials) {
+        let (covered, total) = cells.counts();
+        let entry = &mut by_material[material as usize];
+        entry.1 += covered;
+        entry.2 += total;
+    }
+    let (covered, total) = by_material
+        .iter()
+        .fold((0, 0), |a, b| (a.0 + b.1, a.1 + b.2));
     let cell_area = COVERAGE_CELL * COVERAGE_CELL;
-    let share = if total > 0 {
-        covered as f64 / total as f64
-    } else {
-        0.0
-    };
-    (total as f64 * cell_area, share)
-}
-
-/// A voxel's key.
-type Voxel = (i32, i32, i32);
-
-/// FNV-1a over the voxel's coordinates: the voxel maps are rebuilt for every score, and a
-/// cryptographic hash would cost more than the lookups it serves.
-#[derive(Default)]
-struct VoxelHasher(u64);
-
-impl Hasher for VoxelHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        let mut h = if self.0 == 0 {
-            0xcbf2_9ce4_8422_2325
+    let share = |covered: usize, total: usize| {
+        if total > 0 {
+            covered as f64 / total as f64
         } else {
-            self.0
-        };
-        for &b in bytes {
-            h ^= u64::from(b);
-            h = h.wrapping_mul(0x0000_0100_0000_01b3);
+            0.0
         }
-        self.0 = h;
-    }
+    };
+    (
+        total as f64 * cell_area,
+        share(covered, total),
+        by_material
+            .into_iter()
+            .filter(|(_, _, total)| *total > 0)
+            .map(|(m, covered, total)| {
+                (
+                    m.name().to_string(),
+                    share(covered, total),
+                    total as f64 * cell_area,
+                )
+            })
+            .collect(),
+    )
 }
 
-type VoxelMap = HashMap<Voxel, ([f64; 3], [f64; 3], u32), BuildHasherDefault<VoxelHasher>>;
+/// Earlier stations' readings summed in cubes of [`SEAM_REACH`]: a dense grid over the middle
+/// of the model (from the 0.5th to the 99.5th percentile of each coordinate, so that a few far
+/// ghosts do not blow it up), each cube holding the sum of its points, of their normals, and
+/// their count.
+struct Cubes {
+    origin: [f32; 3],
+    size: [usize; 3],
+    /// Index into `sums` per cube, `u32::MAX` when empty.
+    cells: Vec<u32>,
+    sums: Vec<([f64; 3], [f64; 3], u32)>,
+}
+
+impl Cubes {
+    /// At most this many cubes (16 M: 64 MB of indices); a larger model is compared on the
+    /// cubes nearest its middle.
+    const MAX_CELLS: usize = 1 << 24;
+
+    fn new(vertices: &[[f32; 3]]) -> Self {
+        let mut lo = [0f32; 3];
+        let mut hi = [0f32; 3];
+        for k in 0..3 {
+            let mut c: Vec<f32> = vertices.iter().map(|v| v[k]).collect();
+            let n = c.len();
+            if n > 0 {
+                lo[k] = *c.select_nth_unstable_by(n / 200, f32::total_cmp).1;
+                hi[k] = *c.select_nth_unstable_by(n - 1 - n / 200, f32::total_cmp).1;
+            }
+        }
+        let cube = SEAM_REACH as f32;
+        // One cube of margin on each side, so the neighbours of an edge cube exist.
+        let mut size = [0, 1, 2].map(|k| (((hi[k] - lo[k]) / cube).max(0.0) as usize) + 3);
+        while size.iter().product::<usize>() > Self::MAX_CELLS {
+            let k = (0..3).max_by_key(|&k| size[k]).unwrap_or(0);
+            let cut = size[k] / 4;
+            lo[k] += cut as f32 * cube;
+            size[k] -= 2 * cut;
+        }
+        Cubes {
+            origin: [0, 1, 2].map(|k| lo[k] - cube),
+            size,
+            cells: vec![u32::MAX; size.iter().product()],
+            sums: Vec::new(),
+        }
+    }
+
+    /// The cube of `p`, if inside the grid.
+    #[inline]
+    fn key(&self, p: &[f32; 3]) -> Option<[usize; 3]> {
+        let cube = SEAM_REACH as f32;
+        let mut key = [0usize; 3];
+        for k in 0..3 {
+            let u = (p[k] - self.origin[k]) / cube;
+            if !(u >= 0.0 && (u as usize) < self.size[k]) {
+                return None;
+            }
+            key[k] = u as usize;
+        }
+        Some(key)
+    }
+
+    #[inline]
+    fn index(&self, key: [usize; 3]) -> usize {
+        (key[2] * self.size[1] + key[1]) * self.size[0] + key[0]
+    }
+
+    fn add(&mut self, p: &[f32; 3], n: &[f32; 3]) {
+        let Some(key) = self.key(p) else {
+            return;
+        };
+        let cell = self.index(key);
+        if self.cells[cell] == u32::MAX {
+            self.cells[cell] = self.sums.len() as u32;
+            self.sums.push(([0.0; 3], [0.0; 3], 0));
+        }
+        let e = &mut self.sums[self.cells[cell] as usize];
+        for k in 0..3 {
+            e.0[k] += f64::from(p[k]);
+            e.1[k] += f64::from(n[k]);
+        }
+        e.2 += 1;
+    }
+
+    /// The distance from `p` to the plane of the nearest cube's readings within reach, if any.
+    fn plane_distance(&self, p: &[f32; 3]) -> Option<f64> {
+        let key = self.key(p)?;
+        let q = p.map(f64::from);
+        let mut best: Option<(f64, f64)> = None;
+        for z in key[2].saturating_sub(1)..(key[2] + 2).min(self.size[2]) {
+            for y in key[1].saturating_sub(1)..(key[1] + 2).min(self.size[1]) {
+                for x in key[0].saturating_sub(1)..(key[0] + 2).min(self.size[0]) {
+                    let cell = self.cells[self.index([x, y, z])];
+                    if cell == u32::MAX {
+                        continue;
+                    }
+                    let (sum, normal, count) = &self.sums[cell as usize];
+                    let m = sum.map(|s| s / f64::from(*count));
+                    let d = [q[0] - m[0], q[1] - m[1], q[2] - m[2]];
+                    let gap = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                    if gap <= SEAM_REACH && best.is_none_or(|(g, _)| gap < g) {
+                        let len =
+                            (normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2])
+                                .sqrt()
+                                .max(1e-12);
+                        let along = (d[0] * normal[0] + d[1] * normal[1] + d[2] * normal[2]) / len;
+                        best = Some((gap, along.abs()));
+                    }
+                }
+            }
+        }
+        best.map(|(_, along)| along)
+    }
+}
 
 /// The median point-to-plane distance of later stations' vertices to earlier stations' readings.
 fn seam(model: &Model) -> (Option<f64>, (usize, usize)) {
@@ -348,62 +464,25 @@ fn seam(model: &Model) -> (Option<f64>, (usize, usize)) {
     if stations < 2 {
         return (None, (0, 0));
     }
-    let key = |p: &[f32; 3]| -> Voxel {
-        let k = |x: f32| (f64::from(x) / SEAM_REACH).floor() as i32;
-        (k(p[0]), k(p[1]), k(p[2]))
-    };
     // Vertices by station, in order.
     let mut by_station: Vec<Vec<usize>> = vec![Vec::new(); stations];
     for v in 0..model.vertices.len() {
         by_station[station(v)].push(v);
     }
-    let mut earlier = VoxelMap::default();
+    let mut earlier = Cubes::new(&model.vertices);
     let mut errors = Vec::new();
     let mut compared = 0;
     for (s, vertices) in by_station.iter().enumerate() {
         if s > 0 {
             for &v in vertices.iter().step_by(SEAM_STRIDE) {
                 compared += 1;
-                let p = model.vertices[v].map(f64::from);
-                let (x, y, z) = key(&model.vertices[v]);
-                let mut best: Option<(f64, f64)> = None;
-                for dx in -1..=1 {
-                    for dy in -1..=1 {
-                        for dz in -1..=1 {
-                            let Some((sum, normal, count)) = earlier.get(&(x + dx, y + dy, z + dz))
-                            else {
-                                continue;
-                            };
-                            let q = sum.map(|c| c / f64::from(*count));
-                            let d = [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
-                            let gap = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-                            if gap <= SEAM_REACH && best.is_none_or(|(g, _)| gap < g) {
-                                let len = (normal[0] * normal[0]
-                                    + normal[1] * normal[1]
-                                    + normal[2] * normal[2])
-                                    .sqrt()
-                                    .max(1e-12);
-                                let along =
-                                    (d[0] * normal[0] + d[1] * normal[1] + d[2] * normal[2]) / len;
-                                best = Some((gap, along.abs()));
-                            }
-                        }
-                    }
-                }
-                if let Some((_, along)) = best {
+                if let Some(along) = earlier.plane_distance(&model.vertices[v]) {
                     errors.push(along);
                 }
             }
         }
         for &v in vertices {
-            let p = model.vertices[v];
-            let n = model.normals[v];
-            let e = earlier.entry(key(&p)).or_insert(([0.0; 3], [0.0; 3], 0));
-            for k in 0..3 {
-                e.0[k] += f64::from(p[k]);
-                e.1[k] += f64::from(n[k]);
-            }
-            e.2 += 1;
+            earlier.add(&model.vertices[v], &model.normals[v]);
         }
     }
     let found = errors.len();
