@@ -270,6 +270,7 @@ pub fn mesh_scene(scene: &Scene, options: &MeshOptions) -> SceneMesh {
                     let mut n = out.triangles.len();
                     out.triangles.resize(n + 2 * (last - first), [0; 3]);
                     let tri = &mut out.triangles;
+                    let (up, diagonal, along) = (&up[..cols], &diagonal[..cols], &along[..cols]);
                     for i in first..last {
                         let (k00, k10) = ((j * cols + i) as u32, (j * cols + i + 1) as u32);
                         let (k01, k11) = (k00 + cols as u32, k10 + cols as u32);
@@ -443,13 +444,17 @@ pub fn vertex_normals(scene: &Scene, joined_along: &[f32], joined_up: &[f32]) ->
         let sign = if winding == Some(false) { -1.0 } else { 1.0 };
         let o = scene.origins[j];
         let out = &mut normals[row..row + cols];
+        // Slices of one known length: no bounds check inside the loop.
+        let (ax, ay, az) = (&dx.x[..cols], &dx.y[..cols], &dx.z[..cols]);
+        let (bx, by, bz) = (&dy.x[..cols], &dy.y[..cols], &dy.z[..cols]);
+        let (cx, cy, cz) = (&cur.x[..cols], &cur.y[..cols], &cur.z[..cols]);
         for (i, out) in out.iter_mut().enumerate() {
             let n = [
-                dy.y[i] * dx.z[i] - dy.z[i] * dx.y[i],
-                dy.z[i] * dx.x[i] - dy.x[i] * dx.z[i],
-                dy.x[i] * dx.y[i] - dy.y[i] * dx.x[i],
+                by[i] * az[i] - bz[i] * ay[i],
+                bz[i] * ax[i] - bx[i] * az[i],
+                bx[i] * ay[i] - by[i] * ax[i],
             ];
-            let to_laser = [o[0] - cur.x[i], o[1] - cur.y[i], o[2] - cur.z[i]];
+            let to_laser = [o[0] - cx[i], o[1] - cy[i], o[2] - cz[i]];
             let length2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
             let back2 =
                 to_laser[0] * to_laser[0] + to_laser[1] * to_laser[1] + to_laser[2] * to_laser[2];
