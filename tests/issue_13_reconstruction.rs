@@ -10,7 +10,6 @@
 mod common;
 
 use robot::control::Step;
-use robot::mount::LaserMount;
 use sim::commands::reconstruct::{read_run_folder, reconstruct};
 use sim::commands::run::{RunOptions, run_scenario};
 use sim::config::{Outliers, Scenario};
@@ -368,7 +367,6 @@ fn the_real_backends_path_gives_the_same_scene() {
     );
     assert!((sa.coverage - da.coverage).abs() < 0.01);
     let _ = std::fs::remove_dir_all(&dir);
-    let _ = LaserMount::Head; // the head's geometry came from the robot file both ways
 }
 
 #[test]
