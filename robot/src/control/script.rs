@@ -197,70 +197,22 @@ impl FromStr for Step {
                 }
                 Ok(Step::Pause { seconds })
             }
-            "scene" | "survey" => {
-                let (unit, counts): (&'static str, &[usize]) = if keyword == "scene" {
-                    (
-                        "PAN [FROM TO]: positions, pan 0..=254, tilts 0..=100",
-                        &[1, 3],
-                    )
-                } else {
-                    ("[P1 P2 P3 P4]: four pan positions 0..=254", &[0, 4])
-                };
-                let bad = || StepError::Number {
-                    keyword: if keyword == "scene" {
-                        "scene"
-                    } else {
-                        "survey"
-                    },
-                    unit,
-                    text: rest.trim().to_string(),
-                };
-                let values: Vec<u8> = rest
-                    .split_whitespace()
-                    .map(|v| v.parse::<u8>().map_err(|_| bad()))
-                    .collect::<Result<_, _>>()?;
-                if !counts.contains(&values.len()) {
-                    return Err(bad());
-                }
-                if keyword == "survey" {
-                    let pans = match values.as_slice() {
-                        [] => SURVEY_PANS,
-                        [a, b, c, d] => [*a, *b, *c, *d],
-                        _ => return Err(bad()),
-                    };
-                    if pans.iter().any(|&p| p > crate::hardware::PAN_MAX) {
-                        return Err(bad());
-                    }
-                    return Ok(Step::Survey { pans });
-                }
-                let (from, to) = match values.as_slice() {
-                    [_, from, to] => (*from, *to),
-                    _ => SCENE_TILTS,
-                };
-                if values[0] > crate::hardware::PAN_MAX
-                    || from > crate::hardware::TILT_MAX
-                    || to > crate::hardware::TILT_MAX
-                    || from == to
-                {
-                    return Err(bad());
-                }
-                Ok(Step::Scene {
-                    pan: values[0],
-                    from,
-                    to,
-                })
-            }
-            "head" | "sweep" => {
-                let (unit, count) = if keyword == "head" {
-                    ("PAN TILT: positions, pan 0..=254, tilt 0..=100", 2)
-                } else {
-                    (
+            "head" | "sweep" | "scene" | "survey" => {
+                use crate::hardware::{PAN_MAX, TILT_MAX};
+                let (keyword, unit): (&'static str, &'static str) = match keyword {
+                    "head" => ("head", "PAN TILT: positions, pan 0..=254, tilt 0..=100"),
+                    "sweep" => (
+                        "sweep",
                         "PAN FROM TO STEP: positions, pan 0..=254, tilts 0..=100, step 1..",
-                        4,
-                    )
+                    ),
+                    "scene" => (
+                        "scene",
+                        "PAN [FROM TO]: positions, pan 0..=254, tilts 0..=100",
+                    ),
+                    _ => ("survey", "[P1 P2 P3 P4]: four pan positions 0..=254"),
                 };
                 let bad = || StepError::Number {
-                    keyword: if keyword == "head" { "head" } else { "sweep" },
+                    keyword,
                     unit,
                     text: rest.trim().to_string(),
                 };
@@ -268,29 +220,40 @@ impl FromStr for Step {
                     .split_whitespace()
                     .map(|v| v.parse::<u8>().map_err(|_| bad()))
                     .collect::<Result<_, _>>()?;
-                if values.len() != count
-                    || values[0] > crate::hardware::PAN_MAX
-                    || values[1..]
-                        .iter()
-                        .take(2)
-                        .any(|&t| t > crate::hardware::TILT_MAX)
-                    || (count == 4 && values[3] == 0)
-                {
+                let tilt = |t: u8| t <= TILT_MAX;
+                let step = match (keyword, values.as_slice()) {
+                    ("head", &[pan, t]) if tilt(t) => Step::Head { pan, tilt: t },
+                    ("sweep", &[pan, from, to, step]) if tilt(from) && tilt(to) && step > 0 => {
+                        Step::Sweep {
+                            pan,
+                            from,
+                            to,
+                            step,
+                        }
+                    }
+                    ("scene", &[pan]) => Step::Scene {
+                        pan,
+                        from: SCENE_TILTS.0,
+                        to: SCENE_TILTS.1,
+                    },
+                    ("scene", &[pan, from, to]) if tilt(from) && tilt(to) && from != to => {
+                        Step::Scene { pan, from, to }
+                    }
+                    ("survey", &[]) => Step::Survey { pans: SURVEY_PANS },
+                    ("survey", &[a, b, c, d]) => Step::Survey { pans: [a, b, c, d] },
+                    _ => return Err(bad()),
+                };
+                let pans: &[u8] = match &step {
+                    Step::Head { pan, .. } | Step::Sweep { pan, .. } | Step::Scene { pan, .. } => {
+                        std::slice::from_ref(pan)
+                    }
+                    Step::Survey { pans } => pans,
+                    _ => &[],
+                };
+                if pans.iter().any(|&p| p > PAN_MAX) {
                     return Err(bad());
                 }
-                Ok(if count == 2 {
-                    Step::Head {
-                        pan: values[0],
-                        tilt: values[1],
-                    }
-                } else {
-                    Step::Sweep {
-                        pan: values[0],
-                        from: values[1],
-                        to: values[2],
-                        step: values[3],
-                    }
-                })
+                Ok(step)
             }
             _ => Ok(Step::Firmware(parse_command_text(text)?)),
         }

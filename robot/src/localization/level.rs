@@ -9,6 +9,7 @@
 use super::map::{MapBuilder, MapConfig, Placed};
 use super::matcher::MatcherKind;
 use super::scan::RangeScan;
+use crate::control::SceneTag;
 use crate::geometry::Pose2;
 use crate::hardware::LaserScan;
 use crate::mount::LaserMount;
@@ -51,8 +52,14 @@ impl LevelLocaliser {
         laser.is_level(tolerance).then(|| laser.planar())
     }
 
-    /// A scan with the odometry at its stamp; returns whether it was level and entered the map.
-    pub fn push(&mut self, scan: &LaserScan, odometry: Pose2) -> bool {
+    /// A scan of a tour with the odometry at its stamp; returns whether it entered the map:
+    /// whether it was level and not taken for a 3D scene (the robot stands still while a
+    /// scene is taken, and the station's level scan has already localised it).
+    pub fn push(&mut self, scan: &LaserScan, odometry: Pose2, scene: Option<SceneTag>) -> bool {
+        if scene.is_some() {
+            self.skipped += 1;
+            return false;
+        }
         match Self::level_mount(&self.mount, scan, self.tolerance) {
             Some(mount) => {
                 self.builder.push_odometry(scan.stamp, odometry);
@@ -66,7 +73,7 @@ impl LevelLocaliser {
         }
     }
 
-    /// Scans left out because they were tilted or their head's angles were unknown.
+    /// Scans left out: tilted, taken for a scene, or with the head's angles unknown.
     pub fn skipped(&self) -> usize {
         self.skipped
     }
@@ -93,20 +100,28 @@ mod tests {
         let mount = LaserMount::Head(HeadGeometry::THESIS);
         let mut loc = LevelLocaliser::new(MatcherKind::Lorentz, mount, MapConfig::default());
         let mut scan = LaserScan::sick_lms_half_degree(Stamp::from_millis(10), vec![2000; 361]);
-        assert!(!loc.push(&scan, Pose2::IDENTITY), "head unknown");
+        assert!(!loc.push(&scan, Pose2::IDENTITY, None), "head unknown");
         scan.head = Some(HeadAngles {
             pan: 0.0,
             tilt: 5f64.to_radians(),
         });
-        assert!(!loc.push(&scan, Pose2::IDENTITY), "tilted");
+        assert!(!loc.push(&scan, Pose2::IDENTITY, None), "tilted");
         scan.head = Some(HeadAngles {
             pan: 1.0,
             tilt: 0.001,
         });
-        assert!(loc.push(&scan, Pose2::IDENTITY), "level, panned");
+        let tag = SceneTag {
+            scene: 0,
+            station: 0,
+        };
+        assert!(
+            !loc.push(&scan, Pose2::IDENTITY, Some(tag)),
+            "a scene's scan"
+        );
+        assert!(loc.push(&scan, Pose2::IDENTITY, None), "level, panned");
         let panned = LevelLocaliser::level_mount(&mount, &scan, LEVEL_TOLERANCE_RAD).unwrap();
         assert!((panned.theta - 1.0).abs() < 1e-9);
-        assert_eq!(loc.skipped(), 2);
+        assert_eq!(loc.skipped(), 3);
         let (placed, _) = loc.finish();
         assert_eq!(placed.len(), 1);
     }

@@ -112,9 +112,8 @@ where
                 odometry,
                 scene,
             } => {
-                // A scene's scans are for the 3D model (see `twin run`).
-                if let Some(localiser) = localiser.as_mut().filter(|_| scene.is_none()) {
-                    localiser.push(scan, odometry);
+                if let Some(localiser) = &mut localiser {
+                    localiser.push(scan, odometry, scene);
                 }
                 scans.push((scan.clone(), odometry, scene));
             }
@@ -131,13 +130,7 @@ where
         .iter()
         .filter_map(
             |(scan, odometry, scene): &(LaserScan, Pose2, Option<SceneTag>)| {
-                Some(SceneInput {
-                    tag: (*scene)?,
-                    scan: scan.clone(),
-                    laser: mount.laser_on_base(scan.head),
-                    odometry: *odometry,
-                    truth: None,
-                })
+                SceneInput::of(scan, *odometry, *scene, &mount, None)
             },
         )
         .collect();

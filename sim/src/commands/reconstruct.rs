@@ -44,6 +44,26 @@ pub struct SceneInput {
     pub truth: Option<Pose2>,
 }
 
+impl SceneInput {
+    /// A tour's scan as a scene's input, if it was taken for a scene: its laser pose on the
+    /// base from `mount` and the head's angles it carries.
+    pub fn of(
+        scan: &LaserScan,
+        odometry: Pose2,
+        scene: Option<SceneTag>,
+        mount: &robot::mount::LaserMount,
+        truth: Option<Pose2>,
+    ) -> Option<SceneInput> {
+        Some(SceneInput {
+            tag: scene?,
+            scan: scan.clone(),
+            laser: mount.laser_on_base(scan.head),
+            odometry,
+            truth,
+        })
+    }
+}
+
 /// The rules the sweep tries: the thesis's rule from 50 to 400 mm, and the proposed rule at
 /// several steepest incidences.
 pub fn sweep_rules() -> Vec<MeshRule> {

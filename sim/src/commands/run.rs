@@ -93,11 +93,9 @@ pub fn run_scenario(
                 odometry,
                 scene,
             } => {
-                // A scene's scans are for the 3D model: the robot stands still while they are
-                // taken, and its station scan (level, untagged) already localised it.
-                if let Some(localiser) = localiser.as_mut().filter(|_| scene.is_none()) {
+                if let Some(localiser) = &mut localiser {
                     let clock = Instant::now();
-                    localiser.push(scan, odometry);
+                    localiser.push(scan, odometry, scene);
                     localising += clock.elapsed().as_secs_f64();
                 }
                 kept.push((scan.clone(), odometry, scene));
@@ -155,13 +153,7 @@ pub fn run_scenario(
     let inputs: Vec<SceneInput> = scans
         .iter()
         .filter_map(|r: &ScanRecord| {
-            Some(SceneInput {
-                tag: r.scene?,
-                scan: r.scan.clone(),
-                laser: mount.laser_on_base(r.scan.head),
-                odometry: r.odometry,
-                truth: Some(r.truth),
-            })
+            SceneInput::of(&r.scan, r.odometry, r.scene, &mount, Some(r.truth))
         })
         .collect();
     let map = (!inputs.is_empty()).then(|| crate::world::WorldMap::new(&scenario.world));

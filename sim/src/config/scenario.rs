@@ -44,7 +44,7 @@ use super::checks::{Check, CheckFile, parse_checks};
 use super::error::{ConfigError, Source, resolve};
 use super::robot_file::RobotDescription;
 use super::values::{NonNegative, Positive, RelativeError, UnitInterval};
-use super::world::WorldDescription;
+use super::world::{StartFile, WorldDescription};
 use crate::config::Outliers;
 use core::time::Duration;
 use robot::control::{Pacing, Step, TourConfig};
@@ -434,16 +434,6 @@ struct LocalisationFile {
     matcher: Spanned<String>,
     keyframe_distance_m: Option<NonNegative>,
     keyframe_angle_deg: Option<NonNegative>,
-}
-
-/// `[start]`: where the robot is put instead of the world's start.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct StartFile {
-    x: f64,
-    y: f64,
-    #[serde(default)]
-    heading_deg: f64,
 }
 
 #[derive(Deserialize)]

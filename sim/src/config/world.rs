@@ -469,13 +469,14 @@ impl OpticsFile {
     }
 }
 
+/// `[start]`: where the robot is put, metres and degrees (also a scenario's override).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct StartFile {
-    x: f64,
-    y: f64,
+pub(super) struct StartFile {
+    pub(super) x: f64,
+    pub(super) y: f64,
     #[serde(default)]
-    heading_deg: f64,
+    pub(super) heading_deg: f64,
 }
 
 #[derive(Deserialize)]
