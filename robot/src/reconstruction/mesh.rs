@@ -232,6 +232,8 @@ pub fn mesh_scene(scene: &Scene, options: &MeshOptions) -> SceneMesh {
             }
             let mut along_next = vec![0f32; cols];
             let (mut up, mut diagonal) = (vec![0f32; cols], vec![0f32; cols]);
+            // One row's triangles, written without a branch and kept by advancing the count.
+            let mut row_triangles = vec![[0u32; 3]; 2 * cols + 2];
             for j in 0..rows - 1 {
                 let origin = scene.origins[j];
                 let winding = row_winding(scene, j);
@@ -267,9 +269,8 @@ pub fn mesh_scene(scene: &Scene, options: &MeshOptions) -> SceneMesh {
                     // Without a branch per polygon: every triangle is written, and kept by
                     // advancing the end past it only when valid.
                     let rising = winding == Some(true);
-                    let mut n = out.triangles.len();
-                    out.triangles.resize(n + 2 * (last - first), [0; 3]);
-                    let tri = &mut out.triangles;
+                    let mut n = 0;
+                    let tri = &mut row_triangles;
                     let (up, diagonal, along) = (&up[..cols], &diagonal[..cols], &along[..cols]);
                     for i in first..last {
                         let (k00, k10) = ((j * cols + i) as u32, (j * cols + i + 1) as u32);
@@ -292,7 +293,7 @@ pub fn mesh_scene(scene: &Scene, options: &MeshOptions) -> SceneMesh {
                         };
                         n += usize::from(b);
                     }
-                    tri.truncate(n);
+                    out.triangles.extend_from_slice(&tri[..n]);
                 }
                 rows_soa.swap(0, 1);
                 std::mem::swap(&mut along, &mut along_next);

@@ -68,6 +68,8 @@ impl Model {
             }
         }
         let added = next as usize - offset;
+        self.vertices.reserve(added);
+        self.normals.reserve(added);
         self.vertices
             .extend(p.iter().filter(|point| !point[0].is_nan()));
         self.vertex_scene.resize(offset + added, index);
