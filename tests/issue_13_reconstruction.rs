@@ -412,6 +412,18 @@ fn bad_input_is_refused_with_the_file_line_and_field() {
     std::fs::write(dir.join("estimate.tum"), "# t x y z qx qy qz qw\n1.0 0 0\n").unwrap();
     let (ok, err) = twin(&["reconstruct", d]);
     assert!(!ok && err.contains("estimate.tum:2:"), "{err}");
+    std::fs::remove_file(dir.join("estimate.tum")).unwrap();
+    // Finite but absurd numbers are refused by name, never turned into points at infinity.
+    std::fs::write(
+        dir.join("scans.jsonl"),
+        "{\"t\": 1.0, \"angle_min\": -1.5, \"angle_increment\": 0.01, \"range_max\": 32, \"ranges\": [1.0], \"odometry\": [0, 0, 0], \"laser_mount\": [0, 0, 0], \"laser_z\": 1e300, \"laser_tilt\": 0, \"scene\": 0}\n",
+    )
+    .unwrap();
+    let (ok, err) = twin(&["reconstruct", d]);
+    assert!(
+        !ok && err.contains("scans.jsonl:1: laser_z = 1e300"),
+        "{err}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
     // Scenario files: a model check without scenes, an unknown rule.
     let root = common::repo().join("scenarios");

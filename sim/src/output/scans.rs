@@ -152,6 +152,36 @@ pub fn read_scan_lines(path: &Path) -> Result<Vec<ScanLine>, super::ReadError> {
                 ),
             ));
         }
+        // Finite is not enough: every field in a range a robot indoors can have.
+        let tau = std::f64::consts::TAU;
+        let limits: [(&str, Option<f64>, f64); 9] = [
+            ("angle_min", Some(line.angle_min), tau),
+            ("angle_increment", Some(line.angle_increment), 1.0),
+            ("odometry[0]", Some(line.odometry[0]), 1e5),
+            ("odometry[1]", Some(line.odometry[1]), 1e5),
+            ("odometry[2]", Some(line.odometry[2]), 1e3),
+            ("laser_z", line.laser_z, 100.0),
+            ("laser_tilt", line.laser_tilt, tau),
+            ("head_pan", line.head_pan, 2.0 * tau),
+            ("head_tilt", line.head_tilt, tau),
+        ];
+        let mount = line.laser_mount.unwrap_or_default();
+        let limits = limits.into_iter().chain([
+            ("laser_mount[0]", Some(mount[0]), 100.0),
+            ("laser_mount[1]", Some(mount[1]), 100.0),
+            ("laser_mount[2]", Some(mount[2]), 2.0 * tau),
+        ]);
+        for (field, value, limit) in limits {
+            if let Some(v) = value
+                && v.abs() > limit
+            {
+                return Err(ReadError::malformed(
+                    path,
+                    i + 1,
+                    format!("{field} = {v:?} is out of range: expected at most {limit} in size"),
+                ));
+            }
+        }
         if line.ranges.len() > 10_000 || line.ranges.iter().any(|&r| r < 0.0) {
             return Err(ReadError::malformed(
                 path,

@@ -37,7 +37,7 @@ pub fn read_tum(path: &Path) -> Result<Vec<(Stamp, Pose2)>, super::ReadError> {
                 path,
                 i + 1,
                 format!(
-                    "{what}: expected `t x y z qx qy qz qw`, eight finite numbers, t >= 0 and increasing"
+                    "{what}: expected `t x y z qx qy qz qw`, eight finite numbers, t in [0, 1e9) s and increasing, positions within 100 km, a unit quaternion"
                 ),
             )
         };
@@ -49,7 +49,11 @@ pub fn read_tum(path: &Path) -> Result<Vec<(Stamp, Pose2)>, super::ReadError> {
         if values.len() != 8 {
             return Err(bad(&format!("{} fields", values.len())));
         }
-        if values.iter().any(|v| !v.is_finite()) || !(0.0..1e9).contains(&values[0]) {
+        if values.iter().any(|v| !v.is_finite())
+            || !(0.0..1e9).contains(&values[0])
+            || values[1..4].iter().any(|v| v.abs() > 1e5)
+            || values[4..].iter().any(|v| v.abs() > 1.0 + 1e-6)
+        {
             return Err(bad("out of range"));
         }
         let t = Stamp((values[0] * 1e9).round() as u64);

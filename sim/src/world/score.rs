@@ -371,7 +371,8 @@ impl Cubes {
         }
         let cube = SEAM_REACH as f32;
         // One cube of margin on each side, so the neighbours of an edge cube exist.
-        let mut size = [0, 1, 2].map(|k| (((hi[k] - lo[k]) / cube).max(0.0) as usize) + 3);
+        let mut size =
+            [0, 1, 2].map(|k| (((hi[k] - lo[k]) / cube).max(0.0) as usize).saturating_add(3));
         while size.iter().product::<usize>() > Self::MAX_CELLS {
             let k = (0..3).max_by_key(|&k| size[k]).unwrap_or(0);
             let cut = size[k] / 4;
