@@ -77,6 +77,11 @@ impl Frame {
     fn y(&self, y: f64) -> f64 {
         (self.max[1] + MARGIN - y) * SCALE
     }
+    /// Whether the world point `(x, y)` falls inside the drawing (the world and its margin).
+    fn inside(&self, x: f64, y: f64) -> bool {
+        (self.min[0] - MARGIN..=self.max[0] + MARGIN).contains(&x)
+            && (self.min[1] - MARGIN..=self.max[1] + MARGIN).contains(&y)
+    }
 }
 
 fn render(record: &RunRecord, world: &WorldDescription) -> String {
@@ -129,23 +134,37 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
     // Scans drawn from the true pose (what is there, with the laser's noise) and from odometry.
     // A point where there is no surface — a mirror image off glass or metal, or an outlier — is
     // a ghost, drawn apart; so are the floor hits of a tilted laser.
-    let dots = |points: &[[f64; 3]]| {
+    // Points beyond the drawing (mirror images far behind glass) are counted, not drawn.
+    let beyond = std::cell::Cell::new(0usize);
+    let dots = |points: &mut dyn Iterator<Item = [f64; 3]>| {
         let mut d = String::new();
         for p in points {
-            let _ = write!(d, "M{:.1} {:.1}h0", f.x(p[0]), f.y(p[1]));
+            if f.inside(p[0], p[1]) {
+                let _ = write!(d, "M{:.1} {:.1}h0", f.x(p[0]), f.y(p[1]));
+            } else {
+                beyond.set(beyond.get() + 1);
+            }
         }
         d
     };
     for (d, colour, label) in [
-        (dots(&points.drifted), "#f08a24", "scans at odometry"),
         (
-            dots(&points.seen),
+            dots(&mut points.drifted.iter().copied()),
+            "#f08a24",
+            "scans at odometry",
+        ),
+        (
+            dots(&mut points.seen.iter().copied()),
             point_colour(PointKind::Surface),
             "scans at true pose",
         ),
-        (dots(&points.floor), FLOOR_LEGEND.0, FLOOR_LEGEND.1),
         (
-            dots(&points.ghosts),
+            dots(&mut points.floor.iter().copied()),
+            FLOOR_LEGEND.0,
+            FLOOR_LEGEND.1,
+        ),
+        (
+            dots(&mut points.ghosts.iter().copied()),
             point_colour(PointKind::Ghost),
             "ghosts: no surface there",
         ),
@@ -159,10 +178,7 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
     // The scan-matching estimate's map.
     if let Some(loc) = &record.localisation {
         let stride = loc.map.len().div_ceil(MAX_POINTS).max(1);
-        let mut d = String::new();
-        for p in loc.map.iter().step_by(stride) {
-            let _ = write!(d, "M{:.1} {:.1}h0", f.x(p[0]), f.y(p[1]));
-        }
+        let d = dots(&mut loc.map.iter().step_by(stride).map(|p| [p[0], p[1], 0.0]));
         let _ = writeln!(
             s,
             r#"<path d="{d}" stroke="{}" stroke-width="2" stroke-linecap="round" fill="none" opacity="0.8"><title>scans placed at the estimate</title></path>"#,
@@ -245,12 +261,16 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
     let figures_y = top + 20.0 * legend_rows as f64 + 6.0;
     let _ = writeln!(
         s,
-        r#"<text x="12" y="{figures_y:.0}">{}: {} scans, {:.1} m in {:.1} s, seed {}</text>"#,
+        r#"<text x="12" y="{figures_y:.0}">{}: {} scans, {:.1} m in {:.1} s, seed {}{}</text>"#,
         xml_escape(&record.scenario),
         record.scans.len(),
         record.distance_m,
         record.sim_seconds(),
-        record.seed
+        record.seed,
+        match beyond.get() {
+            0 => String::new(),
+            n => format!("; {n} points beyond the frame (ghosts) not drawn"),
+        }
     );
     let _ = writeln!(
         s,

@@ -18,13 +18,12 @@ const TILTED: f64 = 0.5 * std::f64::consts::PI / 180.0;
 /// Size of each panel, pixels.
 const PANEL: f64 = 460.0;
 
-/// The last scan of the run taken with the scan plane tilted, if any.
+/// The last scan of the run taken with the scan plane clearly tilted down (5° or more: the
+/// picture is about the floor), else the last tilted at all, if any.
 pub fn last_tilted(record: &RunRecord) -> Option<&ScanRecord> {
-    record
-        .scans
-        .iter()
-        .rev()
-        .find(|r| r.frame.tilt.abs() > TILTED)
+    let mut latest = record.scans.iter().rev();
+    let down = latest.clone().find(|r| r.frame.tilt < -(5f64.to_radians()));
+    down.or_else(|| latest.find(|r| r.frame.tilt.abs() > TILTED))
 }
 
 /// Writes the picture of `scan` in `world`.
@@ -80,10 +79,17 @@ fn render(r: &ScanRecord, world: &WorldDescription, scenario: &str) -> String {
 
     // Range against beam angle, with the floor's range by trigonometry: a beam at angle a in a
     // plane tilted down by t from height h meets the floor at h / (cos a · sin t).
+    // The axis reaches the farthest reading and, tilted down, the floor's nearest range (so the
+    // dashed curve the title announces is in the picture), at most 16 m.
+    let floor_nearest = if frame.tilt < 0.0 {
+        frame.origin[2] / (-frame.tilt).sin()
+    } else {
+        0.0
+    };
     let r_max = points
         .iter()
         .map(|p| p.range)
-        .fold(1.0f64, f64::max)
+        .fold(1.0f64.max(floor_nearest * 1.05), f64::max)
         .min(16.0)
         .ceil();
     let (x0, y0) = (50.0, 40.0 + side_height);
@@ -91,7 +97,12 @@ fn render(r: &ScanRecord, world: &WorldDescription, scenario: &str) -> String {
     let ry = |range: f64| y0 - range.min(r_max) / r_max * side_height;
     let _ = writeln!(
         s,
-        r#"<text x="{x0:.0}" y="20">range against beam angle; dashed: the floor by trigonometry</text>"#
+        r#"<text x="{x0:.0}" y="20">range against beam angle{}</text>"#,
+        if frame.tilt < 0.0 {
+            "; dashed: the floor by trigonometry"
+        } else {
+            " (tilted up: no floor in the plane)"
+        }
     );
     let mut grid = String::new();
     for deg in [-90, -45, 0, 45, 90] {
@@ -222,8 +233,13 @@ fn render(r: &ScanRecord, world: &WorldDescription, scenario: &str) -> String {
     );
     let _ = writeln!(
         s,
-        r#"<text x="20" y="{:.0}">middle beam: measured {measured}; the floor by trigonometry (height / sin tilt) at {trig:.3} m. {floor_hits} of {} returns on the floor.</text>"#,
+        r#"<text x="20" y="{:.0}">middle beam: measured {measured}; {}. {floor_hits} of {} returns on the floor.</text>"#,
         y + 20.0,
+        if trig.is_finite() {
+            format!("the floor by trigonometry (height / sin tilt) at {trig:.3} m")
+        } else {
+            "tilted up, the plane never meets the floor".to_string()
+        },
         points.len()
     );
     for (i, (colour, label)) in [
