@@ -292,41 +292,13 @@ fn the_same_seed_gives_the_same_model_bytes() {
 
 #[test]
 fn the_real_backends_path_gives_the_same_scene() {
-    use robot::Clock;
-    use robot::serial::SerialRobot;
-    use sim::commands::serve::{Offer, ServeOptions, Server, WallClock};
-    use std::sync::Arc;
-    use std::sync::atomic::{AtomicBool, Ordering};
     // A short scene (21 tilts) to keep the served run at a few seconds of wall time.
     let mut scenario = common::scenario("scene-lab");
     scenario.steps = vec!["scene 0 20 40".parse::<Step>().unwrap()];
     scenario.checks.clear();
     let direct = run_scenario(&scenario, &RunOptions::default(), |_, _| {}).unwrap();
-    let twin = sim::Twin::new(
-        &scenario.world,
-        &scenario.robot,
-        &scenario.noise,
-        scenario.seed,
-    )
-    .unwrap();
-    let options = ServeOptions {
-        speed: 20.0,
-        base: Offer::Tcp("127.0.0.1:0".into()),
-        pan_tilt: Some(Offer::Tcp("127.0.0.1:0".into())),
-        laser: Some(Offer::Tcp("127.0.0.1:0".into())),
-    };
-    let mut server = Server::new(twin, &options).unwrap();
-    let at = |i: usize| server.addresses()[i].1.parse().unwrap();
-    let config = sim::commands::drive::serial_config(&scenario, at(0), Some(at(1)), Some(at(2)));
-    let stop = Arc::new(AtomicBool::new(false));
-    let flag = Arc::clone(&stop);
-    let handle = std::thread::spawn(move || server.run(&flag, None, |_, _| {}));
-    let clock: Arc<dyn Clock> = Arc::new(WallClock::new(20.0));
-    let mut robot = SerialRobot::open(config, clock).unwrap();
-    let drive = sim::commands::drive::drive_scenario(&mut robot, &scenario, None, |_, _| {});
-    stop.store(true, Ordering::Relaxed);
-    handle.join().unwrap();
-    let drive = drive.unwrap();
+    let (drive, events) = common::drive_served(&scenario, 20.0);
+    let drive = drive.unwrap_or_else(|e| panic!("{e}; events: {events:#?}"));
     // Every scan of the scene knows where the head was, from the pan-tilt's own reports.
     let scene_scans: Vec<_> = drive.scans.iter().filter(|(_, _, s)| s.is_some()).collect();
     assert_eq!(scene_scans.len(), 21);

@@ -3,6 +3,8 @@
 //! pseudo-terminal that the real backend opens like a serial port; and `twin drive` drives a
 //! script through `twin serve` end to end, as the README shows.
 
+mod common;
+
 use robot::Clock;
 use robot::hardware::{Batteries, DriveBase};
 use robot::serial::{Endpoint, SerialConfig, SerialRobot};
@@ -288,29 +290,7 @@ fn the_pan_tilt_homes_and_moves_through_the_serial_face_as_on_the_twin() {
     .unwrap();
     let direct =
         sim::commands::run::run_scenario(&scenario, &Default::default(), |_, _| {}).unwrap();
-    let twin = Twin::new(
-        &scenario.world,
-        &scenario.robot,
-        &scenario.noise,
-        scenario.seed,
-    )
-    .unwrap();
-    let options = ServeOptions {
-        speed: 20.0,
-        base: Offer::Tcp("127.0.0.1:0".into()),
-        pan_tilt: Some(Offer::Tcp("127.0.0.1:0".into())),
-        laser: Some(Offer::Tcp("127.0.0.1:0".into())),
-    };
-    let server = Server::new(twin, &options).unwrap();
-    let at = |i: usize| server.addresses()[i].1.parse::<Endpoint>().unwrap();
-    let config = sim::commands::drive::serial_config(&scenario, at(0), Some(at(1)), Some(at(2)));
-    let (stop, handle) = run(server);
-    let clock: Arc<dyn Clock> = Arc::new(WallClock::new(20.0));
-    let mut robot = SerialRobot::open(config, clock).unwrap();
-    let drive = sim::commands::drive::drive_scenario(&mut robot, &scenario, None, |_, _| {});
-    let events = robot.take_events();
-    stop.store(true, Ordering::Relaxed);
-    handle.join().unwrap();
+    let (drive, events) = common::drive_served(&scenario, 20.0);
     let drive = drive.unwrap_or_else(|e| panic!("{e}; events: {events:#?}"));
     assert!(
         events.iter().any(|e| e.what.contains("homing")),

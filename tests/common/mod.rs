@@ -61,3 +61,47 @@ pub fn thesis_in(world: &WorldDescription, noise: NoiseSettings, seed: u64) -> S
     let twin = Twin::new(world, &robot, &noise, seed).unwrap_or_else(|e| panic!("{e}"));
     SimRobot::new(twin, robot.drive.serial_baud)
 }
+
+/// Drives `scenario` through the real backend: the twin served byte for byte on local TCP ports
+/// (base, pan-tilt, laser) at `speed` × real time, `SerialRobot` with a clock scaled to match,
+/// the same `drive_scenario` as `twin drive`. Returns the drive and the link events.
+pub fn drive_served(
+    scenario: &Scenario,
+    speed: f64,
+) -> (
+    Result<
+        sim::commands::drive::DriveRecord,
+        sim::commands::drive::DriveError<robot::serial::SerialError>,
+    >,
+    Vec<robot::serial::LinkEvent>,
+) {
+    use sim::commands::serve::{Offer, ServeOptions, Server, WallClock};
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let twin = Twin::new(
+        &scenario.world,
+        &scenario.robot,
+        &scenario.noise,
+        scenario.seed,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let options = ServeOptions {
+        speed,
+        base: Offer::Tcp("127.0.0.1:0".into()),
+        pan_tilt: Some(Offer::Tcp("127.0.0.1:0".into())),
+        laser: Some(Offer::Tcp("127.0.0.1:0".into())),
+    };
+    let mut server = Server::new(twin, &options).unwrap();
+    let at = |i: usize| server.addresses()[i].1.parse().unwrap();
+    let config = sim::commands::drive::serial_config(scenario, at(0), Some(at(1)), Some(at(2)));
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&stop);
+    let handle = std::thread::spawn(move || server.run(&flag, None, |_, _| {}));
+    let clock: Arc<dyn robot::Clock> = Arc::new(WallClock::new(speed));
+    let mut robot = robot::serial::SerialRobot::open(config, clock).unwrap();
+    let drive = sim::commands::drive::drive_scenario(&mut robot, scenario, None, |_, _| {});
+    let events = robot.take_events();
+    stop.store(true, Ordering::Relaxed);
+    handle.join().unwrap();
+    (drive, events)
+}
