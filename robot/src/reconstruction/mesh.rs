@@ -24,7 +24,7 @@
 //! it runs *along* the beams: two neighbouring readings whose ranges differ by more than a surface
 //! at `max_incidence` from the beams could make, plus the noise, are not on one surface.
 
-use super::scene::Scene;
+use super::scene::{Points, Scene};
 
 /// When a polygon of neighbouring readings is kept.
 #[derive(Copy, Clone, Debug, PartialEq)]
@@ -116,346 +116,480 @@ impl Default for MeshOptions {
     }
 }
 
-/// The valid polygons of one scene.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct SceneMesh {
-    /// Valid triangles as grid indices (`row * cols + col`), wound counter-clockwise seen from
-    /// the laser.
-    pub triangles: Vec<[u32; 3]>,
+/// What meshing one scene added to a model.
+#[derive(Copy, Clone, Debug, Default, PartialEq)]
+pub(super) struct MeshCounts {
+    /// Readings that returned: the vertices added.
+    pub vertices: usize,
     /// Valid quadrilaterals.
     pub quads: usize,
     /// Quadrilaterals the grid offers: `(rows − 1) × (cols − 1 − 2 trim)`.
     pub quads_possible: usize,
-    /// A unit normal per grid reading, facing the laser (see [`vertex_normals`]).
-    pub normals: Vec<[f32; 3]>,
+    /// Valid triangles.
+    pub triangles: usize,
 }
 
-impl SceneMesh {
-    /// Triangles the grid offers: two per quadrilateral.
-    pub fn triangles_possible(&self) -> usize {
-        2 * self.quads_possible
-    }
+/// Where a meshed scene goes: the model's arrays, appended to.
+pub(super) struct MeshOut<'a> {
+    /// The readings that returned, in grid order.
+    pub vertices: &'a mut Vec<[f32; 3]>,
+    /// Their normals, facing the laser.
+    pub normals: &'a mut Vec<[f32; 3]>,
+    /// Triangles as indices into `vertices`.
+    pub triangles: &'a mut Vec<[u32; 3]>,
 }
 
-/// One row of readings as three arrays of coordinates.
-struct Soa {
-    x: Vec<f32>,
-    y: Vec<f32>,
-    z: Vec<f32>,
+/// One row of readings (one scan): its coordinates in the scene, the ranges from the laser (for
+/// the incidence rule) and the vertex number each reading that returned was given.
+struct Row<'a> {
+    x: &'a [f32],
+    y: &'a [f32],
+    z: &'a [f32],
+    range: Vec<f32>,
+    vertex: Vec<u32>,
 }
 
-impl Soa {
-    fn new(n: usize) -> Self {
-        Soa {
-            x: vec![0.0; n],
-            y: vec![0.0; n],
-            z: vec![0.0; n],
+impl<'a> Row<'a> {
+    /// Row `j` of `scene`, not loaded.
+    fn new(scene: &'a Points, cols: usize, j: usize) -> Self {
+        let span = j * cols..(j + 1) * cols;
+        Row {
+            x: &scene.x[span.clone()],
+            y: &scene.y[span.clone()],
+            z: &scene.z[span],
+            range: vec![0.0; cols],
+            vertex: vec![0; cols],
         }
     }
 
-    fn load(&mut self, row: &[[f32; 3]]) {
-        for (i, p) in row.iter().enumerate() {
-            self.x[i] = p[0];
-            self.y[i] = p[1];
-            self.z[i] = p[2];
+    /// Loads row `j` of `points` (no return: `NaN`), seen from `origin`; the readings that
+    /// returned are numbered and appended to `vertices`.
+    fn load(
+        &mut self,
+        points: &'a Points,
+        j: usize,
+        origin: [f32; 3],
+        ranges: bool,
+        vertices: &mut Vec<[f32; 3]>,
+    ) {
+        let n = self.vertex.len();
+        let span = j * n..(j + 1) * n;
+        let (x, y, z) = (
+            &points.x[span.clone()],
+            &points.y[span.clone()],
+            &points.z[span],
+        );
+        (self.x, self.y, self.z) = (x, y, z);
+        let v = &mut self.vertex[..n];
+        // The readings that returned are appended to `vertices` as they are numbered, a chunk
+        // at a time through a buffer of fixed size: no branch per reading, no bounds checks.
+        const CHUNK: usize = 256;
+        let mut buffer = [[0f32; 3]; CHUNK];
+        for start in (0..n).step_by(CHUNK) {
+            let end = (start + CHUNK).min(n);
+            let first = vertices.len();
+            let mut kept = 0;
+            for i in start..end {
+                v[i] = (first + kept) as u32;
+                // kept never passes i − start: the modulo only tells the compiler.
+                buffer[kept % CHUNK] = [x[i], y[i], z[i]];
+                kept += usize::from(!x[i].is_nan());
+            }
+            vertices.extend_from_slice(&buffer[..kept]);
+        }
+        if ranges {
+            for (i, r) in self.range[..n].iter_mut().enumerate() {
+                let d = [x[i] - origin[0], y[i] - origin[1], z[i] - origin[2]];
+                *r = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            }
         }
     }
 
-    /// `out[i]`: squared distance from reading `i` to reading `i + 1` of the same row.
-    fn along(&self, out: &mut [f32]) {
-        let n = self.x.len();
-        for (i, out) in out.iter_mut().enumerate().take(n.saturating_sub(1)) {
-            let (dx, dy, dz) = (
-                self.x[i + 1] - self.x[i],
-                self.y[i + 1] - self.y[i],
-                self.z[i + 1] - self.z[i],
-            );
-            *out = dx * dx + dy * dy + dz * dz;
-        }
-    }
-
-    /// `out[i]`: squared distance from reading `i` of this row to reading `i + shift` of
-    /// `next`.
-    fn across(&self, next: &Soa, shift: usize, out: &mut [f32]) {
-        let n = self.x.len().saturating_sub(shift);
-        for (i, out) in out.iter_mut().enumerate().take(n) {
-            let (dx, dy, dz) = (
-                next.x[i + shift] - self.x[i],
-                next.y[i + shift] - self.y[i],
-                next.z[i + shift] - self.z[i],
-            );
-            *out = dx * dx + dy * dy + dz * dz;
-        }
+    fn point(&self, i: usize) -> [f32; 3] {
+        [self.x[i], self.y[i], self.z[i]]
     }
 }
 
-/// Squared distance.
+/// `value` where `mask` has every bit set (two readings joined), zero where it is zero: a
+/// difference kept or dropped without a branch.
 #[inline]
-fn dist2(a: &[f32; 3], b: &[f32; 3]) -> f32 {
-    let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-    d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+fn keep(value: f32, mask: u32) -> f32 {
+    f32::from_bits(value.to_bits() & mask)
 }
 
-/// Meshes `scene` by `options`.
-pub fn mesh_scene(scene: &Scene, options: &MeshOptions) -> SceneMesh {
-    let (rows, cols) = (scene.rows, scene.cols);
+/// Appends to `out` the `items` whose reading returned (`x` not `NaN`), without a branch per
+/// item: each is written at the end of a buffer that advances only past a kept one.
+fn append_returned<T: Copy + Default>(out: &mut Vec<T>, items: &[T], x: &[f32]) {
+    const CHUNK: usize = 256;
+    let mut buffer = [T::default(); CHUNK];
+    for (items, x) in items.chunks(CHUNK).zip(x.chunks(CHUNK)) {
+        let mut n = 0;
+        for (item, x) in items.iter().zip(x) {
+            // n never passes the item's index in the chunk: the modulo only tells the compiler.
+            buffer[n % CHUNK] = *item;
+            n += usize::from(!x.is_nan());
+        }
+        out.extend_from_slice(&buffer[..n]);
+    }
+}
+
+/// A rule's edge test, prepared once per scene.
+#[derive(Copy, Clone)]
+enum EdgeTest {
+    /// Squared length within `[lo, hi]`.
+    Length { lo: f32, hi: f32 },
+    /// Shorter than `sqrt(edge2)`, and a range jump within `slope × lateral + noise`.
+    Incidence { slope: f32, noise: f32, edge2: f32 },
+}
+
+impl EdgeTest {
+    fn new(rule: MeshRule) -> Self {
+        match rule {
+            MeshRule::Thesis { min_m, max_m } => EdgeTest::Length {
+                lo: min_m * min_m,
+                hi: max_m * max_m,
+            },
+            MeshRule::Incidence {
+                max_incidence_deg,
+                noise_m,
+                max_edge_m,
+            } => EdgeTest::Incidence {
+                slope: max_incidence_deg.to_radians().tan(),
+                noise: noise_m,
+                edge2: max_edge_m * max_edge_m,
+            },
+        }
+    }
+
+    /// `out[i]`: every bit set when reading `i` of `a` and reading `i + shift` of `b` may share
+    /// a polygon, zero when not, for `i` in `span` (zero elsewhere). A reading with no return
+    /// (`NaN`) fails every test.
+    fn run(self, a: &Row, b: &Row, shift: usize, span: core::ops::Range<usize>, out: &mut [u32]) {
+        out.fill(0);
+        let (s, e) = (span.start, span.end);
+        if s >= e {
+            return;
+        }
+        let (ax, ay, az) = (&a.x[s..e], &a.y[s..e], &a.z[s..e]);
+        let (bx, by, bz) = (
+            &b.x[s + shift..e + shift],
+            &b.y[s + shift..e + shift],
+            &b.z[s + shift..e + shift],
+        );
+        let out = &mut out[s..e];
+        let n = out.len();
+        // Slices of one known length: no bounds check inside the loops.
+        let (ax, ay, az, bx, by, bz) = (&ax[..n], &ay[..n], &az[..n], &bx[..n], &by[..n], &bz[..n]);
+        match self {
+            EdgeTest::Length { lo, hi } => {
+                for i in 0..n {
+                    let (dx, dy, dz) = (bx[i] - ax[i], by[i] - ay[i], bz[i] - az[i]);
+                    let d2 = dx * dx + dy * dy + dz * dz;
+                    // NaN fails both comparisons.
+                    out[i] = 0u32.wrapping_sub(u32::from((d2 >= lo) & (d2 <= hi)));
+                }
+            }
+            EdgeTest::Incidence {
+                slope,
+                noise,
+                edge2,
+            } => {
+                // Two readings are on one surface if their ranges differ by no more than a
+                // surface at the steepest incidence spans between their beams: the lateral
+                // part of the edge, sqrt(d² − jump²), stretched by tan θ, plus the noise.
+                let (ra, rb) = (&a.range[s..e][..n], &b.range[s + shift..e + shift][..n]);
+                for i in 0..n {
+                    let (dx, dy, dz) = (bx[i] - ax[i], by[i] - ay[i], bz[i] - az[i]);
+                    let d2 = dx * dx + dy * dy + dz * dz;
+                    let jump = (ra[i] - rb[i]).abs();
+                    let lateral = (d2 - jump * jump).max(0.0).sqrt();
+                    // NaN fails the first comparison.
+                    let ok = (d2 < edge2) & (jump <= slope * lateral + noise);
+                    out[i] = 0u32.wrapping_sub(u32::from(ok));
+                }
+            }
+        }
+    }
+}
+
+/// The edge masks of a row pair, as [`EdgeTest::run`] writes them. Of `v(i,j)`, `v(i+1,j)`,
+/// `v(i,j+1)`, `v(i+1,j+1)`: `up[i]` joins `v(i,j)`–`v(i,j+1)`, `diagonal[i]` joins
+/// `v(i,j)`–`v(i+1,j+1)`, `below[i]` and `above[i]` join beam `i` to beam `i + 1` in rows `j`
+/// and `j + 1`.
+struct PairEdges<'a> {
+    up: &'a [u32],
+    diagonal: &'a [u32],
+    below: &'a [u32],
+    above: &'a [u32],
+}
+
+impl PairEdges<'_> {
+    /// Whether the two triangles of quadrilateral `i` are valid, and the quadrilateral. The
+    /// thesis's rule tests the distances from each polygon's first vertex: from `v(i,j)` up,
+    /// across and (the quadrilateral) along; from `v(i+1,j+1)` down (the next column's `up`)
+    /// and across. The incidence rule tests every edge of each triangle.
+    #[inline]
+    fn valid<const INCIDENCE: bool>(&self, i: usize) -> (u32, u32, u32) {
+        let (up, diagonal) = (self.up[i], self.diagonal[i]);
+        if INCIDENCE {
+            let first = diagonal & up & self.above[i];
+            let second = diagonal & self.up[i + 1] & self.below[i];
+            (first, second, first & second)
+        } else {
+            let first = up & diagonal;
+            (first, self.up[i + 1] & diagonal, first & self.below[i])
+        }
+    }
+}
+
+/// Meshes `scene` by `options` and appends its vertices, normals and triangles to `out`.
+///
+/// A row pair at a time: the readings of the next scan are loaded into arrays, the rule tests
+/// the edges along that scan, up to it and across the diagonals (several lanes at a time), the
+/// pair's triangles are written without a branch per polygon, and the normals of the row whose
+/// neighbours are now all known are computed. Nothing the size of the grid is allocated.
+pub(super) fn mesh_into(scene: &Scene, options: &MeshOptions, out: MeshOut<'_>) -> MeshCounts {
+    let rows = scene.rows.min(scene.origins.len());
+    let cols = scene
+        .cols
+        .min(scene.points.len().checked_div(rows).unwrap_or(0));
     let trim = options.trim_beams.min(cols / 2);
     let (first, last) = (trim, cols.saturating_sub(1 + trim));
-    let mut out = SceneMesh {
-        triangles: Vec::with_capacity(2 * rows * cols),
-        quads: 0,
+    let vertices_before = out.vertices.len();
+    let triangles_before = out.triangles.len();
+    let mut counts = MeshCounts {
         quads_possible: rows.saturating_sub(1) * last.saturating_sub(first),
-        normals: Vec::new(),
+        ..MeshCounts::default()
     };
-    // Which neighbours the rule joins, for the vertex normals: 1.0 or 0.0 per grid reading for
-    // its edge to the next beam of its scan, and to the same beam of the next scan.
-    let mut joined_along = vec![0f32; rows * cols];
-    let mut joined_up = vec![0f32; rows * cols];
-    if rows < 2 || last <= first {
-        out.normals = vertex_normals(scene, &joined_along, &joined_up);
-        return out;
+    if cols == 0 {
+        return counts;
     }
-    let p = &scene.points;
-    match options.rule {
-        MeshRule::Thesis { min_m, max_m } => {
-            let (lo, hi) = (min_m * min_m, max_m * max_m);
-            // NaN (no return) fails both comparisons.
-            let ok = |d: f32| (d >= lo) & (d <= hi);
-            // Squared distances along the rows, in columns and across the diagonals, a row
-            // pair at a time, in arrays the compiler can run several lanes at a time.
-            let mut rows_soa = [Soa::new(cols), Soa::new(cols)];
-            rows_soa[0].load(&p[..cols]);
-            let mut along = vec![0f32; cols];
-            rows_soa[0].along(&mut along);
-            for i in first..last {
-                joined_along[i] = f32::from(u8::from(ok(along[i])));
-            }
-            let mut along_next = vec![0f32; cols];
-            let (mut up, mut diagonal) = (vec![0f32; cols], vec![0f32; cols]);
-            // One row's triangles, written without a branch and kept by advancing the count.
-            let mut row_triangles = vec![[0u32; 3]; 2 * cols + 2];
-            for j in 0..rows - 1 {
-                let origin = scene.origins[j];
-                let winding = row_winding(scene, j);
-                let (low, high) = rows_soa.split_at_mut(1);
-                let (a_row, b_row) = (&low[0], &mut high[0]);
-                b_row.load(&p[(j + 1) * cols..(j + 2) * cols]);
-                a_row.across(b_row, 0, &mut up);
-                a_row.across(b_row, 1, &mut diagonal);
-                b_row.along(&mut along_next);
-                let row = j * cols;
-                for i in first..=last {
-                    joined_up[row + i] = f32::from(u8::from(ok(up[i])));
-                }
-                for i in first..last {
-                    joined_along[row + cols + i] = f32::from(u8::from(ok(along_next[i])));
-                }
-                if winding.is_none() {
-                    // Rows that do not tell the winding: orient each triangle by its normal.
-                    for i in first..last {
-                        let (k00, k10) = (j * cols + i, j * cols + i + 1);
-                        let (k01, k11) = (k00 + cols, k10 + cols);
-                        let a = ok(up[i]) & ok(diagonal[i]);
-                        let b = ok(up[i + 1]) & ok(diagonal[i]);
-                        out.quads += usize::from(a & ok(along[i]));
-                        if a {
-                            out.triangles.push(facing(p, origin, [k00, k01, k11]));
-                        }
-                        if b {
-                            out.triangles.push(facing(p, origin, [k11, k10, k00]));
-                        }
-                    }
-                } else {
-                    // Without a branch per polygon: every triangle is written, and kept by
-                    // advancing the end past it only when valid.
-                    let rising = winding == Some(true);
-                    let mut n = 0;
-                    let tri = &mut row_triangles;
-                    let (up, diagonal, along) = (&up[..cols], &diagonal[..cols], &along[..cols]);
-                    for i in first..last {
-                        let (k00, k10) = ((j * cols + i) as u32, (j * cols + i + 1) as u32);
-                        let (k01, k11) = (k00 + cols as u32, k10 + cols as u32);
-                        // From v(i,j): up to v(i,j+1), across to v(i+1,j+1), along to v(i+1,j);
-                        // from v(i+1,j+1): down to v(i+1,j) (the next column's `up`).
-                        let a = ok(up[i]) & ok(diagonal[i]);
-                        let b = ok(up[i + 1]) & ok(diagonal[i]);
-                        out.quads += usize::from(a & ok(along[i]));
-                        tri[n] = if rising {
-                            [k00, k01, k11]
-                        } else {
-                            [k00, k11, k01]
-                        };
-                        n += usize::from(a);
-                        tri[n] = if rising {
-                            [k11, k10, k00]
-                        } else {
-                            [k11, k00, k10]
-                        };
-                        n += usize::from(b);
-                    }
-                    out.triangles.extend_from_slice(&tri[..n]);
-                }
-                rows_soa.swap(0, 1);
-                std::mem::swap(&mut along, &mut along_next);
-            }
-        }
-        MeshRule::Incidence {
-            max_incidence_deg,
-            noise_m,
-            max_edge_m,
-        } => {
-            let slope = max_incidence_deg.to_radians().tan();
-            let edge2 = max_edge_m * max_edge_m;
-            let ranges: Vec<f32> = (0..rows * cols)
-                .map(|k| {
-                    let o = &scene.origins[k / cols];
-                    dist2(&p[k], o).sqrt()
-                })
-                .collect();
-            // Two readings are on one surface if their ranges differ by no more than a surface
-            // at the steepest incidence spans between their beams: r · Δ · tan θ, Δ the angle
-            // between the beams (the chord over the nearer range), plus the noise.
-            let ok = |a: usize, b: usize| {
-                let (pa, pb) = (&p[a], &p[b]);
-                let d2 = dist2(pa, pb);
-                // NaN (no return) fails this comparison too.
-                if d2.partial_cmp(&edge2) != Some(std::cmp::Ordering::Less) {
-                    return false;
-                }
-                let (ra, rb) = (ranges[a], ranges[b]);
-                let jump = (ra - rb).abs();
-                // The chord between the beams at the nearer range: sqrt(d² − jump²) is the
-                // lateral part of the edge, which a surface at incidence θ stretches by tan θ.
-                let lateral = (d2 - jump * jump).max(0.0).sqrt();
-                jump <= slope * lateral + noise_m
+    let test = EdgeTest::new(options.rule);
+    let incidence = matches!(test, EdgeTest::Incidence { .. });
+    let points = &scene.points;
+    // Rows j − 1, j and j + 1; the edge masks along rows j and j + 1, up from rows j − 1 and j,
+    // and across the diagonals from row j.
+    let mut row = [0, 0, 0].map(|j| Row::new(points, cols, j));
+    let mut along = [vec![0u32; cols], vec![0u32; cols]];
+    let mut up = [vec![0u32; cols], vec![0u32; cols]];
+    let mut diagonal = vec![0u32; cols];
+    let mut normals = Normals::new(cols);
+    row[1].load(points, 0, scene.origins[0], incidence, out.vertices);
+    test.run(&row[1], &row[1], 1, first..last, &mut along[0]);
+    for j in 0..rows {
+        if j + 1 < rows {
+            let (low, high) = row.split_at_mut(2);
+            let (a, b) = (&low[1], &mut high[0]);
+            b.load(points, j + 1, scene.origins[j + 1], incidence, out.vertices);
+            test.run(b, b, 1, first..last, &mut along[1]);
+            test.run(a, b, 0, first..last + 1, &mut up[1]);
+            test.run(a, b, 1, first..last, &mut diagonal);
+            let edges = PairEdges {
+                up: &up[1],
+                diagonal: &diagonal,
+                below: &along[0],
+                above: &along[1],
             };
-            for j in 0..rows - 1 {
-                let origin = scene.origins[j];
-                let up = row_winding(scene, j);
-                for i in first..last {
-                    let (k00, k10) = (j * cols + i, j * cols + i + 1);
-                    let (k01, k11) = (k00 + cols, k10 + cols);
-                    let diagonal = ok(k00, k11);
-                    let (left_up, right_up) = (ok(k00, k01), ok(k10, k11));
-                    let (bottom, top) = (ok(k00, k10), ok(k01, k11));
-                    joined_up[k00] = f32::from(u8::from(left_up));
-                    joined_up[k10] = f32::from(u8::from(right_up));
-                    joined_along[k00] = f32::from(u8::from(bottom));
-                    joined_along[k01] = f32::from(u8::from(top));
-                    let a = diagonal && left_up && top;
-                    let b = diagonal && right_up && bottom;
-                    if a && b {
-                        out.quads += 1;
-                    }
-                    if a {
-                        out.triangles.push(wound(p, origin, [k00, k01, k11], up));
-                    }
-                    if b {
-                        out.triangles.push(wound(p, origin, [k11, k10, k00], up));
-                    }
-                }
-            }
+            let (span, tri, o) = (first..last, &mut *out.triangles, scene.origins[j]);
+            counts.quads += match (row_winding(scene, j), incidence) {
+                (Some(true), false) => pair::<false, true>(a, b, &edges, span, tri),
+                (Some(false), false) => pair::<false, false>(a, b, &edges, span, tri),
+                (Some(true), true) => pair::<true, true>(a, b, &edges, span, tri),
+                (Some(false), true) => pair::<true, false>(a, b, &edges, span, tri),
+                (None, false) => pair_facing::<false>(a, b, &edges, span, o, tri),
+                (None, true) => pair_facing::<true>(a, b, &edges, span, o, tri),
+            };
+        } else {
+            up[1].fill(0);
         }
+        // Row j's neighbours are all known: its normals. The last row takes the winding of
+        // the pair below it.
+        let winding = row_winding(scene, j.min(rows.saturating_sub(2)));
+        normals.row(
+            [&row[0], &row[1], &row[2]],
+            [&up[0], &up[1], &along[0]],
+            scene.origins[j],
+            winding,
+        );
+        append_returned(out.normals, &normals.out, row[1].x);
+        row.rotate_left(1);
+        along.swap(0, 1);
+        up.swap(0, 1);
     }
-    out.normals = vertex_normals(scene, &joined_along, &joined_up);
-    out
+    counts.vertices = out.vertices.len() - vertices_before;
+    counts.triangles = out.triangles.len() - triangles_before;
+    counts
 }
 
-/// A unit normal for every reading of the grid, facing the laser: the cross product of its
-/// differences along the scan and across the scans, each taken over the neighbours the mesh's
-/// rule joins to it (both sides: the central difference; one: forward or backward), so a
-/// normal never leans across a depth jump. A reading joined to no neighbour in one direction
-/// faces straight back to the laser. (The thesis gives quadrilaterals per-vertex normals from
-/// "that vertex and the next two": the one-sided difference.) Computed a row at a time on
-/// arrays of coordinates, several readings at once.
-pub fn vertex_normals(scene: &Scene, joined_along: &[f32], joined_up: &[f32]) -> Vec<[f32; 3]> {
-    let (rows, cols) = (scene.rows, scene.cols);
-    let p = &scene.points;
-    let mut normals = vec![[0f32; 3]; rows * cols];
-    if cols < 2 {
-        return normals;
-    }
-    // Rows as coordinate arrays with no-returns at zero: a neighbour's mask is zero whenever
-    // it did not return, and zero times a finite number is zero.
-    let load = |soa: &mut Soa, row: &[[f32; 3]]| {
-        for (i, q) in row.iter().enumerate() {
-            let r = if q[0].is_nan() { [0.0; 3] } else { *q };
-            soa.x[i] = r[0];
-            soa.y[i] = r[1];
-            soa.z[i] = r[2];
-        }
-    };
-    let mut soa = [Soa::new(cols), Soa::new(cols), Soa::new(cols)];
-    load(&mut soa[1], &p[..cols]);
-    let (mut dx, mut dy) = (Soa::new(cols), Soa::new(cols));
-    let zeros = vec![0f32; cols];
-    // The mask of the edge to the left of each reading: the previous reading's `along`.
-    let mut left = vec![0f32; cols];
-    for j in 0..rows {
-        let row = j * cols;
-        if j + 1 < rows {
-            load(&mut soa[2], &p[row + cols..row + 2 * cols]);
-        } else {
-            soa[2].x.fill(0.0);
-            soa[2].y.fill(0.0);
-            soa[2].z.fill(0.0);
-        }
-        let up = &joined_up[row..row + cols];
-        let down = if j > 0 {
-            &joined_up[row - cols..row]
-        } else {
-            &zeros[..]
+/// The triangles of rows `a` (scan `j`) and `b` (scan `j + 1`) over the quadrilaterals in
+/// `span`, wound counter-clockwise seen from the laser (`RISING`: row `b` above row `a` in its
+/// view), appended to `out` without a branch per polygon; returns the valid quadrilaterals.
+#[inline]
+fn pair<const INCIDENCE: bool, const RISING: bool>(
+    a: &Row,
+    b: &Row,
+    edges: &PairEdges<'_>,
+    span: core::ops::Range<usize>,
+    out: &mut Vec<[u32; 3]>,
+) -> usize {
+    // A chunk of columns at a time into a buffer of fixed size: no bounds checks inside.
+    const CHUNK: usize = 128;
+    let mut buffer = [[0u32; 3]; 2 * CHUNK];
+    let mut quads = 0;
+    for start in span.clone().step_by(CHUNK) {
+        let end = (start + CHUNK).min(span.end);
+        let (av, bv) = (&a.vertex[start..=end], &b.vertex[start..=end]);
+        let chunk = PairEdges {
+            up: &edges.up[start..=end],
+            diagonal: &edges.diagonal[start..end],
+            below: &edges.below[start..end],
+            above: &edges.above[start..end],
         };
-        let right = &joined_along[row..row + cols];
-        left[0] = 0.0;
-        left[1..].copy_from_slice(&right[..cols - 1]);
-        let (prev, cur, next) = (&soa[0], &soa[1], &soa[2]);
-        for (k, c, n, d, e) in [
-            (&prev.x, &cur.x, &next.x, &mut dx.x, &mut dy.x),
-            (&prev.y, &cur.y, &next.y, &mut dx.y, &mut dy.y),
-            (&prev.z, &cur.z, &next.z, &mut dx.z, &mut dy.z),
-        ] {
-            // Along the scan: m_right (c[i+1] − c[i]) + m_left (c[i] − c[i−1]).
-            d[0] = right[0] * (c[1] - c[0]);
-            d[cols - 1] = left[cols - 1] * (c[cols - 1] - c[cols - 2]);
-            for ((((d, r), l), w), (&cm, &cp)) in d[1..cols - 1]
-                .iter_mut()
-                .zip(&right[1..cols - 1])
-                .zip(&left[1..cols - 1])
-                .zip(&c[1..cols - 1])
-                .zip(c[..cols - 2].iter().zip(&c[2..]))
-            {
-                *d = r * (cp - w) + l * (w - cm);
+        let mut n = 0;
+        for i in 0..end - start {
+            let (v00, v10, v01, v11) = (av[i], av[i + 1], bv[i], bv[i + 1]);
+            let (first, second, quad) = chunk.valid::<INCIDENCE>(i);
+            quads += (quad & 1) as usize;
+            // Every triangle is written, and kept by advancing the end past it only when
+            // valid; n stays below 2 i + 2, the modulo only tells the compiler.
+            buffer[n % (2 * CHUNK)] = if RISING {
+                [v00, v01, v11]
+            } else {
+                [v00, v11, v01]
+            };
+            n += (first & 1) as usize;
+            buffer[n % (2 * CHUNK)] = if RISING {
+                [v11, v10, v00]
+            } else {
+                [v11, v00, v10]
+            };
+            n += (second & 1) as usize;
+        }
+        out.extend_from_slice(&buffer[..n]);
+    }
+    quads
+}
+
+/// As [`pair`] for rows that do not tell the winding (no tilt between them): each triangle is
+/// oriented by its own normal to face the laser at `origin`.
+fn pair_facing<const INCIDENCE: bool>(
+    a: &Row,
+    b: &Row,
+    edges: &PairEdges<'_>,
+    span: core::ops::Range<usize>,
+    origin: [f32; 3],
+    out: &mut Vec<[u32; 3]>,
+) -> usize {
+    let mut quads = 0;
+    for i in span {
+        let (first, second, quad) = edges.valid::<INCIDENCE>(i);
+        quads += (quad & 1) as usize;
+        let (p00, p10, p01, p11) = (a.point(i), a.point(i + 1), b.point(i), b.point(i + 1));
+        let (v00, v10) = (a.vertex[i], a.vertex[i + 1]);
+        let (v01, v11) = (b.vertex[i], b.vertex[i + 1]);
+        if first != 0 {
+            out.push(facing(origin, [p00, p01, p11], [v00, v01, v11]));
+        }
+        if second != 0 {
+            out.push(facing(origin, [p11, p10, p00], [v11, v10, v00]));
+        }
+    }
+    quads
+}
+
+/// Vertex normals a row at a time, with scratch arrays kept between rows.
+struct Normals {
+    /// Differences along the scan, per coordinate.
+    along: [Vec<f32>; 3],
+    /// Differences across the scans, per coordinate.
+    across: [Vec<f32>; 3],
+    /// The mask of the edge to the left of each reading.
+    left: Vec<u32>,
+    /// The row's normals.
+    out: Vec<[f32; 3]>,
+}
+
+impl Normals {
+    fn new(cols: usize) -> Self {
+        Normals {
+            along: [vec![0.0; cols], vec![0.0; cols], vec![0.0; cols]],
+            across: [vec![0.0; cols], vec![0.0; cols], vec![0.0; cols]],
+            left: vec![0; cols],
+            out: vec![[0.0; 3]; cols],
+        }
+    }
+
+    /// A unit normal for every reading of row `cur`, facing the laser at `origin`: the cross
+    /// product of its differences along the scan and across the scans, each taken over the
+    /// neighbours the mesh's rule joins to it (both sides: the central difference; one: forward
+    /// or backward), so a normal never leans across a depth jump. A reading joined to no
+    /// neighbour in one direction faces straight back to the laser. (The thesis gives
+    /// quadrilaterals per-vertex normals from "that vertex and the next two": the one-sided
+    /// difference.) `down` and `up`: the masks of the edges from the row below and to the row
+    /// above; `right`: along the row. `winding`: whether the rows rise in the laser's view
+    /// (`None`: they do not tell, and each normal is turned to the laser by its dot product).
+    fn row(
+        &mut self,
+        [prev, cur, next]: [&Row<'_>; 3],
+        [down, up, right]: [&[u32]; 3],
+        origin: [f32; 3],
+        winding: Option<bool>,
+    ) {
+        let cols = self.out.len();
+        self.left[0] = 0;
+        self.left[1..].copy_from_slice(&right[..cols - 1]);
+        let left = &self.left[..];
+        let coordinates = [
+            (cur.x, next.x, prev.x),
+            (cur.y, next.y, prev.y),
+            (cur.z, next.z, prev.z),
+        ];
+        for (k, (c, n, pv)) in coordinates.into_iter().enumerate() {
+            let d = &mut self.along[k][..cols];
+            // Along the scan: (c[i+1] − c[i]) where joined right, plus (c[i] − c[i−1]) where
+            // joined left; a difference not joined is zero, even to a reading with no return.
+            if cols >= 2 {
+                d[0] = keep(c[1] - c[0], right[0]);
+                d[cols - 1] = keep(c[cols - 1] - c[cols - 2], left[cols - 1]);
+                for ((((d, &r), &l), &w), (&cm, &cp)) in d[1..cols - 1]
+                    .iter_mut()
+                    .zip(&right[1..cols - 1])
+                    .zip(&left[1..cols - 1])
+                    .zip(&c[1..cols - 1])
+                    .zip(c[..cols - 2].iter().zip(&c[2..cols]))
+                {
+                    *d = keep(cp - w, r) + keep(w - cm, l);
+                }
+            } else {
+                d.fill(0.0);
             }
-            // Across the scans: m_up (next − c) + m_down (c − prev).
-            for (((((e, u), dn), &w), &nx), &pv) in e
+            // Across the scans: (next − c) where joined up, plus (c − prev) where joined down.
+            for (((((e, &u), &dn), &w), &nx), &pr) in self.across[k][..cols]
                 .iter_mut()
-                .zip(up)
-                .zip(down)
-                .zip(c.iter())
-                .zip(n.iter())
-                .zip(k.iter())
+                .zip(&up[..cols])
+                .zip(&down[..cols])
+                .zip(&c[..cols])
+                .zip(&n[..cols])
+                .zip(&pv[..cols])
             {
-                *e = u * (nx - w) + dn * (w - pv);
+                *e = keep(nx - w, u) + keep(w - pr, dn);
             }
         }
         // Across the scans the rows rise (or fall) in the laser's view, along them the beams
         // turn left: "across × along" faces the laser for rising rows.
-        let winding = row_winding(scene, j.min(rows.saturating_sub(2)));
         let sign = if winding == Some(false) { -1.0 } else { 1.0 };
-        let o = scene.origins[j];
-        let out = &mut normals[row..row + cols];
-        // Slices of one known length: no bounds check inside the loop.
-        let (ax, ay, az) = (&dx.x[..cols], &dx.y[..cols], &dx.z[..cols]);
-        let (bx, by, bz) = (&dy.x[..cols], &dy.y[..cols], &dy.z[..cols]);
+        let [ax, ay, az] = &self.along;
+        let [bx, by, bz] = &self.across;
+        let (ax, ay, az) = (&ax[..cols], &ay[..cols], &az[..cols]);
+        let (bx, by, bz) = (&bx[..cols], &by[..cols], &bz[..cols]);
         let (cx, cy, cz) = (&cur.x[..cols], &cur.y[..cols], &cur.z[..cols]);
-        for (i, out) in out.iter_mut().enumerate() {
+        for (i, out) in self.out.iter_mut().enumerate() {
             let n = [
                 by[i] * az[i] - bz[i] * ay[i],
                 bz[i] * ax[i] - bx[i] * az[i],
                 bx[i] * ay[i] - by[i] * ax[i],
             ];
-            let to_laser = [o[0] - cx[i], o[1] - cy[i], o[2] - cz[i]];
+            let to_laser = [origin[0] - cx[i], origin[1] - cy[i], origin[2] - cz[i]];
             let length2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
             let back2 =
                 to_laser[0] * to_laser[0] + to_laser[1] * to_laser[1] + to_laser[2] * to_laser[2];
@@ -467,18 +601,15 @@ pub fn vertex_normals(scene: &Scene, joined_along: &[f32], joined_up: &[f32]) ->
             };
             *out = [0, 1, 2].map(|k| n[k] * a + to_laser[k] * b);
         }
-        // Rows that do not tell (no tilt between them): face the laser by the dot product.
         if winding.is_none() {
-            for (i, n) in out.iter_mut().enumerate() {
-                let to_laser = [o[0] - cur.x[i], o[1] - cur.y[i], o[2] - cur.z[i]];
+            for (i, n) in self.out.iter_mut().enumerate() {
+                let to_laser = [origin[0] - cx[i], origin[1] - cy[i], origin[2] - cz[i]];
                 if n[0] * to_laser[0] + n[1] * to_laser[1] + n[2] * to_laser[2] < 0.0 {
                     *n = [-n[0], -n[1], -n[2]];
                 }
             }
         }
-        soa.rotate_left(1);
     }
-    normals
 }
 
 /// How the triangles between rows `j` and `j + 1` are wound to face the laser: in the laser's
@@ -497,27 +628,17 @@ fn row_winding(scene: &Scene, j: usize) -> Option<bool> {
     (rise.abs() > 1e-6).then_some(rise > 0.0)
 }
 
-/// Triangle `t` (grid indices) wound as the rows say, or facing `origin` by its own normal.
+/// The triangle of points `p` and vertex numbers `v`, wound counter-clockwise as seen from
+/// `origin` (its normal towards it).
 #[inline]
-fn wound(p: &[[f32; 3]], origin: [f32; 3], t: [usize; 3], up: Option<bool>) -> [u32; 3] {
-    match up {
-        Some(true) => t.map(|k| k as u32),
-        Some(false) => [t[0] as u32, t[2] as u32, t[1] as u32],
-        None => facing(p, origin, t),
-    }
-}
-
-/// The triangle `t` wound counter-clockwise as seen from `origin` (its normal towards it).
-#[inline]
-fn facing(p: &[[f32; 3]], origin: [f32; 3], t: [usize; 3]) -> [u32; 3] {
-    let n = normal(&p[t[0]], &p[t[1]], &p[t[2]]);
-    let a = &p[t[0]];
+fn facing(origin: [f32; 3], p: [[f32; 3]; 3], v: [u32; 3]) -> [u32; 3] {
+    let n = normal(&p[0], &p[1], &p[2]);
+    let a = &p[0];
     let towards = [origin[0] - a[0], origin[1] - a[1], origin[2] - a[2]];
-    let t = t.map(|k| k as u32);
     if n[0] * towards[0] + n[1] * towards[1] + n[2] * towards[2] >= 0.0 {
-        t
+        v
     } else {
-        [t[0], t[2], t[1]]
+        [v[0], v[2], v[1]]
     }
 }
 
@@ -548,6 +669,11 @@ mod tests {
     use super::*;
     use crate::control::SceneTag;
     use crate::geometry::Pose2;
+    use crate::reconstruction::Model;
+
+    fn mesh(scene: &Scene, options: &MeshOptions) -> Model {
+        Model::build(std::slice::from_ref(scene), options)
+    }
 
     /// A scene of `rows` × `cols` readings on the plane x = 2 seen from the origin, with `depth`
     /// added to the readings of the columns from `step_at` on (a depth jump).
@@ -568,7 +694,7 @@ mod tests {
             },
             rows,
             cols,
-            points,
+            points: points.into_iter().collect(),
             origins: vec![[0.0, 0.0, 0.0]; rows],
             // The rows rise: each one's middle beam a little higher than the last.
             forwards: (0..rows).map(|j| [1.0, 0.0, 0.01 * j as f32]).collect(),
@@ -582,55 +708,55 @@ mod tests {
     #[test]
     fn a_flat_grid_is_all_valid_and_faces_the_laser() {
         let scene = wall(4, 5, usize::MAX, 0.0);
-        let mesh = mesh_scene(&scene, &MeshOptions::default());
-        assert_eq!(mesh.quads_possible, 3 * 4);
-        assert_eq!(mesh.quads, 12);
-        assert_eq!(mesh.triangles.len(), 24);
-        for t in &mesh.triangles {
-            let p = &scene.points;
+        let model = mesh(&scene, &MeshOptions::default());
+        assert_eq!(model.scenes[0].quads, (12, 3 * 4));
+        assert_eq!(model.triangles.len(), 24);
+        for t in &model.triangles {
+            let p = &model.vertices;
             let n = normal(&p[t[0] as usize], &p[t[1] as usize], &p[t[2] as usize]);
             assert!(
                 n[0] < 0.0,
                 "the wall at x = 2 faces the laser at the origin"
             );
         }
-        let area: f32 = mesh
+        let area: f32 = model
             .triangles
             .iter()
-            .map(|t| triangle_area(&scene.points, t))
+            .map(|t| triangle_area(&model.vertices, t))
             .sum();
         assert!((area - 0.08 * 0.06).abs() < 1e-6);
-        let trimmed = mesh_scene(
+        let trimmed = mesh(
             &scene,
             &MeshOptions {
                 trim_beams: 1,
                 ..MeshOptions::default()
             },
         );
-        assert_eq!(trimmed.quads_possible, 3 * 2);
+        assert_eq!(trimmed.scenes[0].quads, (3 * 2, 3 * 2));
     }
 
     #[test]
     fn the_thesis_rule_bridges_small_jumps_and_drops_no_returns() {
         let mut scene = wall(3, 6, 3, 0.15);
         // 15 cm behind: within 200 mm, so the thesis bridges the jump…
-        let thesis = mesh_scene(&scene, &MeshOptions::default());
-        assert_eq!(thesis.quads, 2 * 5);
+        let thesis = mesh(&scene, &MeshOptions::default());
+        assert_eq!(thesis.scenes[0].quads.0, 2 * 5);
         // …where the incidence rule sees polygons running along the beams.
         let options = MeshOptions {
             rule: MeshRule::INCIDENCE,
             trim_beams: 0,
         };
-        let proposed = mesh_scene(&scene, &options);
+        let proposed = mesh(&scene, &options);
         assert_eq!(
-            proposed.quads,
+            proposed.scenes[0].quads.0,
             2 * 4,
             "the column of quads over the jump is gone"
         );
         // A reading with no return takes every polygon it belongs to.
-        scene.points[7] = [f32::NAN; 3];
-        let holed = mesh_scene(&scene, &MeshOptions::default());
-        assert_eq!(holed.quads, 10 - 4);
+        scene.points.set(7, [f32::NAN; 3]);
+        let holed = mesh(&scene, &MeshOptions::default());
+        assert_eq!(holed.scenes[0].quads.0, 10 - 4);
+        assert_eq!(holed.vertices.len(), 3 * 6 - 1);
         // Readings closer than 5 mm are not a polygon for App. D.
         let dense = Scene {
             points: wall(3, 3, 9, 0.0)
@@ -640,6 +766,119 @@ mod tests {
                 .collect(),
             ..wall(3, 3, 9, 0.0)
         };
-        assert_eq!(mesh_scene(&dense, &MeshOptions::default()).quads, 0);
+        assert_eq!(mesh(&dense, &MeshOptions::default()).scenes[0].quads.0, 0);
+    }
+
+    /// The rules written plainly, polygon by polygon on the grid, with the vertices numbered
+    /// afterwards: the streamed mesh must give the same triangles, in the same order.
+    fn plain(scene: &Scene, options: &MeshOptions) -> (Vec<[u32; 3]>, usize) {
+        let (rows, cols) = (scene.rows, scene.cols);
+        let p: Vec<[f32; 3]> = scene.points.iter().collect();
+        let mut number = vec![u32::MAX; p.len()];
+        let mut next = 0;
+        for (k, q) in p.iter().enumerate() {
+            if !q[0].is_nan() {
+                number[k] = next;
+                next += 1;
+            }
+        }
+        let range = |k: usize| {
+            let o = scene.origins[k / cols];
+            let d = [p[k][0] - o[0], p[k][1] - o[1], p[k][2] - o[2]];
+            (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+        };
+        let ok = |a: usize, b: usize| {
+            let d = [p[b][0] - p[a][0], p[b][1] - p[a][1], p[b][2] - p[a][2]];
+            let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            match options.rule {
+                MeshRule::Thesis { min_m, max_m } => d2 >= min_m * min_m && d2 <= max_m * max_m,
+                MeshRule::Incidence {
+                    max_incidence_deg,
+                    noise_m,
+                    max_edge_m,
+                } => {
+                    let jump = (range(a) - range(b)).abs();
+                    let lateral = (d2 - jump * jump).max(0.0).sqrt();
+                    d2 < max_edge_m * max_edge_m
+                        && jump <= max_incidence_deg.to_radians().tan() * lateral + noise_m
+                }
+            }
+        };
+        let trim = options.trim_beams;
+        let (mut triangles, mut quads) = (Vec::new(), 0);
+        for j in 0..rows - 1 {
+            for i in trim..cols - 1 - trim {
+                let (k00, k10) = (j * cols + i, j * cols + i + 1);
+                let (k01, k11) = (k00 + cols, k10 + cols);
+                let (a, b, quad) = match options.rule {
+                    MeshRule::Thesis { .. } => {
+                        let a = ok(k00, k01) && ok(k00, k11);
+                        (a, ok(k11, k10) && ok(k11, k00), a && ok(k00, k10))
+                    }
+                    MeshRule::Incidence { .. } => {
+                        let a = ok(k00, k11) && ok(k00, k01) && ok(k01, k11);
+                        let b = ok(k00, k11) && ok(k10, k11) && ok(k00, k10);
+                        (a, b, a && b)
+                    }
+                };
+                quads += usize::from(quad);
+                let rising = row_winding(scene, j).unwrap();
+                let wind = |t: [usize; 3]| {
+                    let t = t.map(|k| number[k]);
+                    if rising { t } else { [t[0], t[2], t[1]] }
+                };
+                if a {
+                    triangles.push(wind([k00, k01, k11]));
+                }
+                if b {
+                    triangles.push(wind([k11, k10, k00]));
+                }
+            }
+        }
+        (triangles, quads)
+    }
+
+    #[test]
+    fn the_streamed_mesh_is_the_rules_applied_polygon_by_polygon() {
+        // A rough, holed surface whose depth jumps now and then, seen rising and falling.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut noise = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        for falling in [false, true] {
+            let mut scene = wall(23, 41, usize::MAX, 0.0);
+            for k in 0..scene.points.len() {
+                let u = noise();
+                scene.points.x[k] += 0.3 * noise() + if u > 0.9 { 0.5 } else { 0.0 };
+                if u < 0.05 {
+                    scene.points.set(k, [f32::NAN; 3]);
+                }
+            }
+            if falling {
+                scene.forwards.reverse();
+            }
+            for rule in [
+                MeshRule::THESIS,
+                MeshRule::thesis_with_max(0.35),
+                MeshRule::INCIDENCE,
+            ] {
+                for trim_beams in [0, 3] {
+                    let options = MeshOptions { rule, trim_beams };
+                    let model = mesh(&scene, &options);
+                    let (triangles, quads) = plain(&scene, &options);
+                    assert!(!triangles.is_empty() && quads < model.scenes[0].quads.1);
+                    assert_eq!(model.triangles, triangles, "{rule}, trim {trim_beams}");
+                    assert_eq!(model.scenes[0].quads.0, quads, "{rule}, trim {trim_beams}");
+                    assert_eq!(model.vertices.len(), model.normals.len());
+                    for n in &model.normals {
+                        let length = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+                        assert!((length - 1.0).abs() < 1e-4, "{n:?}");
+                    }
+                }
+            }
+        }
     }
 }

@@ -5,7 +5,7 @@
 //!    as a grid of world points (rows: scans, columns: beams), each reading put in 3D through
 //!    the chain of Eq. 4.1 ([`crate::mount`]) with the head's angles its scan carries and the
 //!    base's pose at its stamp.
-//! 2. A **mesh** ([`mesh_scene`]) joins four grid neighbours into a quadrilateral or two
+//! 2. A **mesh** ([`Model::add`]) joins four grid neighbours into a quadrilateral or two
 //!    triangles when they plausibly lie on one surface ([`MeshRule`]: the thesis's fixed
 //!    distance, or the proposed incidence rule), wound to face the laser.
 //! 3. A **model** ([`Model`]) merges the scenes of one or more stations, each placed by the
@@ -48,9 +48,7 @@ mod model;
 mod placement;
 mod scene;
 
-pub use mesh::{
-    MeshOptions, MeshRule, SceneMesh, mesh_scene, normal, triangle_area, vertex_normals,
-};
+pub use mesh::{MeshOptions, MeshRule, normal, triangle_area};
 pub use model::{Model, SceneStats};
 pub use placement::EstimatePlacement;
 pub use scene::{Scene, SceneError, SceneScan};

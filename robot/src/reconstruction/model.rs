@@ -2,7 +2,7 @@
 //! mesh, in the world frame (thesis §5.3.2–5.3.3). As in the thesis the scenes are placed side by
 //! side — each by the base pose at its scans — and overlaid, not fused.
 
-use super::mesh::{MeshOptions, SceneMesh, mesh_scene, triangle_area};
+use super::mesh::{MeshOptions, MeshOut, mesh_into, triangle_area};
 use super::scene::Scene;
 use crate::control::SceneTag;
 use crate::geometry::Pose2;
@@ -31,8 +31,8 @@ pub struct SceneStats {
 pub struct Model {
     /// The readings that returned.
     pub vertices: Vec<[f32; 3]>,
-    /// A unit normal per vertex, facing the laser that saw it
-    /// ([`vertex_normals`](super::mesh::vertex_normals)).
+    /// A unit normal per vertex, facing the laser that saw it: across × along the scans, over
+    /// the neighbours the mesh's rule joins to it.
     pub normals: Vec<[f32; 3]>,
     /// Which scene (index into `scenes`) each vertex comes from.
     pub vertex_scene: Vec<u16>,
@@ -46,52 +46,51 @@ impl Model {
     /// Meshes every scene by `options` and merges them.
     pub fn build(scenes: &[Scene], options: &MeshOptions) -> Model {
         let mut model = Model::default();
-        for scene in scenes {
-            let mesh = mesh_scene(scene, options);
-            model.add(scene, &mesh);
-        }
+        model.rebuild(scenes, options);
         model
     }
 
-    /// Adds one meshed scene.
-    pub fn add(&mut self, scene: &Scene, mesh: &SceneMesh) {
-        let index = self.scenes.len() as u16;
-        let p = &scene.points;
-        // The readings that returned become vertices, in grid order.
-        let offset = self.vertices.len();
-        let mut remap = vec![u32::MAX; p.len()];
-        let mut next = offset as u32;
-        for (k, point) in p.iter().enumerate() {
-            if !point[0].is_nan() {
-                remap[k] = next;
-                next += 1;
-            }
+    /// As [`build`](Model::build), into this model's arrays: their memory is reused, which is
+    /// what a robot rebuilding its model scene after scene wants.
+    pub fn rebuild(&mut self, scenes: &[Scene], options: &MeshOptions) {
+        self.vertices.clear();
+        self.normals.clear();
+        self.vertex_scene.clear();
+        self.triangles.clear();
+        self.scenes.clear();
+        // Room for every reading, and for two triangles per grid cell.
+        let readings: usize = scenes.iter().map(|s| s.points.len()).sum();
+        self.vertices.reserve(readings);
+        self.normals.reserve(readings);
+        self.vertex_scene.reserve(readings);
+        self.triangles.reserve(2 * readings);
+        for scene in scenes {
+            self.add(scene, options);
         }
-        let added = next as usize - offset;
-        self.vertices.reserve(added);
-        self.normals.reserve(added);
-        self.vertices
-            .extend(p.iter().filter(|point| !point[0].is_nan()));
-        self.vertex_scene.resize(offset + added, index);
-        self.triangles
-            .extend(mesh.triangles.iter().map(|t| t.map(|k| remap[k as usize])));
-        // The normals of the readings that returned.
-        self.normals.extend(
-            scene
-                .points
-                .iter()
-                .zip(&mesh.normals)
-                .filter(|(point, _)| !point[0].is_nan())
-                .map(|(_, n)| *n),
+    }
+
+    /// Meshes one more scene by `options` and adds it: its readings that returned become
+    /// vertices (in grid order), with their normals and the scene's valid triangles.
+    pub fn add(&mut self, scene: &Scene, options: &MeshOptions) {
+        let index = self.scenes.len() as u16;
+        let counts = mesh_into(
+            scene,
+            options,
+            MeshOut {
+                vertices: &mut self.vertices,
+                normals: &mut self.normals,
+                triangles: &mut self.triangles,
+            },
         );
+        self.vertex_scene.resize(self.vertices.len(), index);
         self.scenes.push(SceneStats {
             tag: scene.tag,
             base: scene.base,
             pan: scene.pan,
             scans: scene.rows,
-            points: added,
-            quads: (mesh.quads, mesh.quads_possible),
-            triangles: (mesh.triangles.len(), mesh.triangles_possible()),
+            points: counts.vertices,
+            quads: (counts.quads, counts.quads_possible),
+            triangles: (counts.triangles, 2 * counts.quads_possible),
         });
     }
 

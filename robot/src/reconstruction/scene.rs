@@ -63,6 +63,79 @@ impl<'a> SceneScan<'a> {
     }
 }
 
+/// Points as three arrays of coordinates, which arithmetic can run on several at a time.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Points {
+    /// x of every point, metres.
+    pub x: Vec<f32>,
+    /// y of every point, metres.
+    pub y: Vec<f32>,
+    /// z of every point, metres.
+    pub z: Vec<f32>,
+}
+
+impl Points {
+    /// Points.
+    pub fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    /// Whether there is none.
+    pub fn is_empty(&self) -> bool {
+        self.x.is_empty()
+    }
+
+    /// Point `k`.
+    pub fn get(&self, k: usize) -> Option<[f32; 3]> {
+        Some([*self.x.get(k)?, *self.y.get(k)?, *self.z.get(k)?])
+    }
+
+    /// Sets point `k`; panics if there is no point `k`.
+    pub fn set(&mut self, k: usize, p: [f32; 3]) {
+        (self.x[k], self.y[k], self.z[k]) = (p[0], p[1], p[2]);
+    }
+
+    /// Every point in order.
+    pub fn iter(&self) -> impl Iterator<Item = [f32; 3]> + '_ {
+        (0..self.len()).map(|k| [self.x[k], self.y[k], self.z[k]])
+    }
+
+    /// Appends a point.
+    pub fn push(&mut self, p: [f32; 3]) {
+        self.x.push(p[0]);
+        self.y.push(p[1]);
+        self.z.push(p[2]);
+    }
+
+    fn clear(&mut self) {
+        self.x.clear();
+        self.y.clear();
+        self.z.clear();
+    }
+
+    fn reserve(&mut self, n: usize) {
+        self.x.reserve(n);
+        self.y.reserve(n);
+        self.z.reserve(n);
+    }
+
+    fn resize(&mut self, n: usize) {
+        self.x.resize(n, 0.0);
+        self.y.resize(n, 0.0);
+        self.z.resize(n, 0.0);
+    }
+}
+
+impl FromIterator<[f32; 3]> for Points {
+    fn from_iter<I: IntoIterator<Item = [f32; 3]>>(points: I) -> Self {
+        let mut out = Points::default();
+        for p in points {
+            out.push(p);
+        }
+        out
+    }
+}
+
 /// The readings of one scene as a grid of 3D points in the world frame (z up).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
@@ -73,7 +146,7 @@ pub struct Scene {
     /// Beams per scan (grid columns).
     pub cols: usize,
     /// Row-major points, metres; a reading with no return is `NaN` in every coordinate.
-    pub points: Vec<[f32; 3]>,
+    pub points: Points,
     /// Each row's laser optical centre, world frame, metres: where the readings were seen from.
     pub origins: Vec<[f32; 3]>,
     /// Each row's middle beam direction, world frame (unit).
@@ -92,6 +165,24 @@ impl Scene {
     /// Builds the grid of `scans`, in the order they were taken, each placed by its laser pose
     /// on the base pose given beside it.
     pub fn build(tag: SceneTag, scans: &[SceneScan<'_>]) -> Result<Scene, SceneError> {
+        let mut scene = Scene {
+            tag,
+            rows: 0,
+            cols: 0,
+            points: Points::default(),
+            origins: Vec::new(),
+            forwards: Vec::new(),
+            planes: Vec::new(),
+            base: Pose2::IDENTITY,
+            pan: 0.0,
+            skipped: 0,
+        };
+        scene.rebuild(tag, scans)?;
+        Ok(scene)
+    }
+
+    /// As [`build`](Scene::build), into this scene's arrays: their memory is reused.
+    pub fn rebuild(&mut self, tag: SceneTag, scans: &[SceneScan<'_>]) -> Result<(), SceneError> {
         let mut placed = scans.iter().filter_map(|s| Some((s, s.laser?.on(s.base))));
         let Some((first, _)) = placed.clone().next() else {
             return Err(SceneError::Empty { scene: tag.scene });
@@ -99,24 +190,23 @@ impl Scene {
         let cols = first.scan.len();
         let (angle_min, increment) = (first.scan.angle_min, first.scan.angle_increment);
         // The beams' directions in the laser's plane, once for the scene.
-        let trig: Vec<(f32, f32)> = (0..cols)
+        let (sin, cos): (Vec<f32>, Vec<f32>) = (0..cols)
             .map(|i| {
                 let (s, c) = (angle_min + i as f64 * increment).sin_cos();
                 (s as f32, c as f32)
             })
-            .collect();
-        let mut scene = Scene {
-            tag,
-            rows: 0,
-            cols,
-            points: Vec::with_capacity(scans.len() * cols),
-            origins: Vec::with_capacity(scans.len()),
-            forwards: Vec::with_capacity(scans.len()),
-            planes: Vec::with_capacity(scans.len()),
-            base: first.base,
-            pan: first.scan.head.map_or(0.0, |h| h.pan),
-            skipped: scans.len(),
-        };
+            .unzip();
+        self.tag = tag;
+        self.rows = 0;
+        self.cols = cols;
+        self.points.clear();
+        self.points.reserve(scans.len() * cols);
+        self.origins.clear();
+        self.forwards.clear();
+        self.planes.clear();
+        self.base = first.base;
+        self.pan = first.scan.head.map_or(0.0, |h| h.pan);
+        self.skipped = scans.len();
         for (s, laser) in placed.by_ref() {
             let scan = s.scan;
             if scan.len() != cols
@@ -137,29 +227,33 @@ impl Scene {
             let (forward, left, plane) = (column(0), column(1), column(2));
             let o = laser.origin().map(|v| v as f32);
             let max = scan.range_max_mm;
-            // Single precision: millimetre readings over tens of metres keep micrometres.
-            scene
-                .points
-                .extend(scan.ranges_mm.iter().zip(&trig).map(|(&mm, &(s, c))| {
-                    if mm == 0 || mm >= max {
-                        [f32::NAN; 3]
-                    } else {
-                        let d = f32::from(mm) * 1e-3;
-                        let (a, b) = (d * c, d * s);
-                        [
-                            o[0] + a * forward[0] + b * left[0],
-                            o[1] + a * forward[1] + b * left[1],
-                            o[2] + a * forward[2] + b * left[2],
-                        ]
-                    }
-                }));
-            scene.origins.push(o);
-            scene.forwards.push(forward);
-            scene.planes.push(plane);
-            scene.rows += 1;
+            // Single precision: millimetre readings over tens of metres keep micrometres. A
+            // reading with no return is scaled by NaN, without a branch.
+            let start = self.points.len();
+            self.points.resize(start + cols);
+            let Points { x, y, z } = &mut self.points;
+            let (x, y, z) = (
+                &mut x[start..start + cols],
+                &mut y[start..start + cols],
+                &mut z[start..start + cols],
+            );
+            let (ranges, sin, cos) = (&scan.ranges_mm[..cols], &sin[..cols], &cos[..cols]);
+            for i in 0..cols {
+                let mm = ranges[i];
+                let scale = if mm == 0 || mm >= max { f32::NAN } else { 1e-3 };
+                let d = f32::from(mm) * scale;
+                let (a, b) = (d * cos[i], d * sin[i]);
+                x[i] = o[0] + a * forward[0] + b * left[0];
+                y[i] = o[1] + a * forward[1] + b * left[1];
+                z[i] = o[2] + a * forward[2] + b * left[2];
+            }
+            self.origins.push(o);
+            self.forwards.push(forward);
+            self.planes.push(plane);
+            self.rows += 1;
         }
-        scene.skipped -= scene.rows;
-        Ok(scene)
+        self.skipped -= self.rows;
+        Ok(())
     }
 
     /// The scenes of a run: `rows` are its scene scans in the order they were taken, each with
@@ -183,13 +277,16 @@ impl Scene {
 
     /// The point of beam `col` in scan `row`, if it returned.
     pub fn point(&self, row: usize, col: usize) -> Option<[f32; 3]> {
-        let p = *self.points.get(row * self.cols + col)?;
+        if col >= self.cols {
+            return None;
+        }
+        let p = self.points.get(row * self.cols + col)?;
         (!p[0].is_nan()).then_some(p)
     }
 
     /// Readings that returned.
     pub fn returned(&self) -> usize {
-        self.points.iter().filter(|p| !p[0].is_nan()).count()
+        self.points.x.iter().filter(|x| !x.is_nan()).count()
     }
 }
 
