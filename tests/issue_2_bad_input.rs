@@ -44,7 +44,7 @@ fn a_world_with_a_wrongly_typed_coordinate_names_line_and_field() {
     let message = err.to_string();
     assert!(message.starts_with("worlds/box.toml:4:"), "{message}");
     assert!(message.contains("y = \"one\""), "{message}");
-    assert_eq!(err.field.as_deref(), Some("y"));
+    assert_eq!(err.field.as_deref(), Some("start.y"));
 }
 
 #[test]

@@ -38,7 +38,7 @@ fn thesis_pairs(maker: &PairMaker, n: usize, seed: u64) -> Vec<(Pose2, ScanPair)
     let mut rng = sim::rng::SimRng::seed_from_u64(seed);
     (0..n)
         .map(|_| {
-            let a = maker.free_pose(0.6, &mut rng);
+            let a = maker.free_pose(0.6, &mut rng).unwrap();
             let u = |rng: &mut sim::rng::SimRng| rng.random::<f64>() - 0.5;
             let motion = Pose2::new(u(&mut rng), 0.1 * u(&mut rng), 0.8 * u(&mut rng));
             let pair = maker.pair(a, a.compose(&motion), &mut rng);
@@ -64,7 +64,7 @@ fn every_matcher_recovers_small_motions_without_outliers() {
     let mut rng = sim::rng::SimRng::seed_from_u64(4);
     let pairs: Vec<_> = (0..25)
         .map(|_| {
-            let a = maker.free_pose(0.6, &mut rng);
+            let a = maker.free_pose(0.6, &mut rng).unwrap();
             let motion = Pose2::new(
                 0.1 * (rng.random::<f64>() - 0.5),
                 0.04 * (rng.random::<f64>() - 0.5),
@@ -126,7 +126,7 @@ fn mbicp_recovers_turns_that_point_to_point_icp_misses() {
     let mut rng = sim::rng::SimRng::seed_from_u64(25);
     let pairs: Vec<_> = (0..30)
         .map(|k| {
-            let a = maker.free_pose(0.6, &mut rng);
+            let a = maker.free_pose(0.6, &mut rng).unwrap();
             let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
             maker.pair(
                 a,
@@ -314,7 +314,7 @@ fn twin_map_names_bad_logs() {
 fn twin_match_answers_every_line_and_survives_garbage() {
     let maker = maker("none");
     let mut rng = sim::rng::SimRng::seed_from_u64(9);
-    let a = maker.free_pose(0.6, &mut rng);
+    let a = maker.free_pose(0.6, &mut rng).unwrap();
     let pair = maker.pair(a, a.compose(&Pose2::new(0.2, 0.0, 0.05)), &mut rng);
     let line = serde_json::json!({
         "ref": pair.reference, "cur": pair.current, "guess": [0.17, 0.02, 0.03]

@@ -99,7 +99,7 @@ fn a_tightened_bound_fails_with_a_report_naming_the_scenario_and_the_check() {
     let text = original
         .replace("\"../worlds/", &format!("\"{}/../worlds/", root.display()))
         .replace("\"robots/", &format!("\"{}/robots/", root.display()))
-        .replace("min = 4\nmax = 4", "min = 4\nmax = 3");
+        .replace("min = 4\nmax = 4", "min = 5\nmax = 6");
     assert_ne!(text, original, "the bound was tightened");
     let path = dir.join("tilted-scan-broken.toml");
     std::fs::write(&path, text).unwrap();
@@ -109,7 +109,7 @@ fn a_tightened_bound_fails_with_a_report_naming_the_scenario_and_the_check() {
     let text = report.to_string();
     assert!(text.contains("tilted-scan: 2 check(s), 1 FAILED"), "{text}");
     assert!(
-        text.contains("FAIL check[0] scans: measured 4, expected in [4, 3]"),
+        text.contains("FAIL check[0] scans: measured 4, expected in [5, 6]"),
         "{text}"
     );
     // And `twin run` exits non-zero with that report.
@@ -243,7 +243,7 @@ fn malformed_checks_and_steps_are_refused_naming_the_field() {
         ),
         (
             "[[check]]\nkind = \"scans\"\nmax_m = 3\n",
-            "check[0].min_m",
+            "check[0].max_m",
             "takes no min_m / max_m",
         ),
         (
@@ -253,8 +253,13 @@ fn malformed_checks_and_steps_are_refused_naming_the_field() {
         ),
         (
             "[[check]]\nkind = \"scans\"\nmin = -1\n",
-            "check[0].kind",
-            "finite and not negative",
+            "check[0].min",
+            "expected a bound from 0 to 1e9, found -1",
+        ),
+        (
+            "[[check]]\nkind = \"scans\"\nmin = 5\nmax = 2\n",
+            "check[0].min",
+            "could never pass",
         ),
         (
             "[[check]]\nkind = \"scans\"\nmin = 1\ncolour = 3\n",

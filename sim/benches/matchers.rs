@@ -34,7 +34,7 @@ fn twin_pairs() -> Vec<Case> {
     let mut rng = sim::rng::SimRng::seed_from_u64(7);
     (0..40)
         .map(|_| {
-            let a = maker.free_pose(0.6, &mut rng);
+            let a = maker.free_pose(0.6, &mut rng).unwrap();
             let u = |rng: &mut sim::rng::SimRng| rng.random::<f64>() - 0.5;
             let motion = Pose2::new(0.5 * u(&mut rng), 0.1 * u(&mut rng), 0.8 * u(&mut rng));
             let pair = maker.pair(a, a.compose(&motion), &mut rng);

@@ -30,7 +30,7 @@ fn main() {
         let mut rng = sim::rng::SimRng::seed_from_u64(51);
         let cases: Vec<_> = (0..pairs)
             .map(|_| {
-                let a = maker.free_pose(0.6, &mut rng);
+                let a = maker.free_pose(0.6, &mut rng).unwrap();
                 let sign = if rng.random::<bool>() { 1.0 } else { -1.0 };
                 let motion = if rng.random::<bool>() {
                     Pose2::new(0.5 * sign, 0.0, 0.0)

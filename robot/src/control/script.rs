@@ -155,6 +155,9 @@ impl Step {
     }
 }
 
+/// The longest `pause`, seconds: an hour.
+pub const MAX_PAUSE_S: f64 = 3600.0;
+
 impl FromStr for Step {
     type Err = StepError;
 
@@ -187,11 +190,12 @@ impl FromStr for Step {
                 degrees: number("turn", "degrees")?,
             }),
             "pause" => {
-                let seconds = number("pause", "seconds, not negative")?;
-                if seconds < 0.0 {
+                const UNIT: &str = "seconds, 0 to 3600";
+                let seconds = number("pause", UNIT)?;
+                if !(0.0..=MAX_PAUSE_S).contains(&seconds) {
                     return Err(StepError::Number {
                         keyword: "pause",
-                        unit: "seconds, not negative",
+                        unit: UNIT,
                         text: rest.trim().to_string(),
                     });
                 }

@@ -38,7 +38,12 @@ impl ScanMatcher for LeastSquares {
         "ls"
     }
 
-    fn align(&self, reference: &Reference, current: &ScanPoints, guess: Pose2) -> MatchResult {
+    fn align_plausible(
+        &self,
+        reference: &Reference,
+        current: &ScanPoints,
+        guess: Pose2,
+    ) -> MatchResult {
         if reference.points.is_empty() || current.is_empty() {
             return MatchResult::unmatched(guess);
         }

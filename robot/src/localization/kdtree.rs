@@ -94,7 +94,8 @@ impl KdTree {
             None => (usize::MAX, f64::INFINITY),
         };
         self.search(0, self.points.len(), q, bound_scale, &mut metric, &mut best);
-        Some(best)
+        // No point at a finite distance (a query or points at infinity, a metric of NaN).
+        (best.0 != usize::MAX).then_some(best)
     }
 
     fn search(

@@ -60,7 +60,8 @@ impl Line {
     pub fn project(&self, p: [f64; 2], margin: f64) -> [f64; 2] {
         let t = (p[0] - self.centroid[0]) * self.direction[0]
             + (p[1] - self.centroid[1]) * self.direction[1];
-        let t = t.clamp(self.extent[0] - margin, self.extent[1] + margin);
+        // max/min rather than clamp: never a panic, whatever the numbers.
+        let t = t.max(self.extent[0] - margin).min(self.extent[1] + margin);
         [
             self.centroid[0] + t * self.direction[0],
             self.centroid[1] + t * self.direction[1],

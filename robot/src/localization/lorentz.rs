@@ -183,7 +183,12 @@ impl ScanMatcher for Lorentz {
         }
     }
 
-    fn align(&self, reference: &Reference, current: &ScanPoints, guess: Pose2) -> MatchResult {
+    fn align_plausible(
+        &self,
+        reference: &Reference,
+        current: &ScanPoints,
+        guess: Pose2,
+    ) -> MatchResult {
         if reference.points.is_empty() || current.is_empty() {
             return MatchResult::unmatched(guess);
         }

@@ -6,6 +6,16 @@ use crate::geometry::Pose2;
 use std::fmt;
 use std::str::FromStr;
 
+/// The farthest a point or a guess may lie from its frame's origin, metres (100 km): beyond it
+/// a reading is not one (no laser reaches that far) and a guess is not a guess. Squares and sums
+/// of such numbers stay far from overflow.
+pub const MAX_COORDINATE_M: f64 = 1e5;
+
+/// Whether `p` is finite and within [`MAX_COORDINATE_M`] of the origin on each axis.
+pub fn plausible(p: [f64; 2]) -> bool {
+    p[0].abs() <= MAX_COORDINATE_M && p[1].abs() <= MAX_COORDINATE_M
+}
+
 /// What a match found.
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct MatchResult {
@@ -66,7 +76,26 @@ pub trait ScanMatcher: Send + Sync + fmt::Debug {
 
     /// Aligns `current` (points in its own laser frame) to a prepared `reference`, starting
     /// from `guess` (the pose of the current frame in the reference frame).
-    fn align(&self, reference: &Reference, current: &ScanPoints, guess: Pose2) -> MatchResult;
+    ///
+    /// Any input is answered: a guess or a point that is not finite or lies farther than
+    /// [`MAX_COORDINATE_M`] gives the guess back, not converged, without calling
+    /// [`align_plausible`](Self::align_plausible).
+    fn align(&self, reference: &Reference, current: &ScanPoints, guess: Pose2) -> MatchResult {
+        let pose_ok = plausible([guess.x, guess.y]) && guess.theta.abs() <= MAX_COORDINATE_M;
+        if !(pose_ok && reference.points.is_plausible() && current.is_plausible()) {
+            return MatchResult::unmatched(guess);
+        }
+        self.align_plausible(reference, current, guess)
+    }
+
+    /// [`align`](Self::align) for inputs known to be finite and within [`MAX_COORDINATE_M`]:
+    /// what each matcher implements.
+    fn align_plausible(
+        &self,
+        reference: &Reference,
+        current: &ScanPoints,
+        guess: Pose2,
+    ) -> MatchResult;
 
     /// Aligns two range scans: only beams that returned enter the match.
     fn match_scans(&self, reference: &RangeScan, current: &RangeScan, guess: Pose2) -> MatchResult {

@@ -128,7 +128,7 @@ impl Mbicp {
         let (r, u) = ([a[0] - p[0], a[1] - p[1]], [b[0] - a[0], b[1] - a[1]]);
         let uu = m(u, u);
         let t = if uu > 0.0 {
-            (-m(u, r) / uu).clamp(0.0, 1.0)
+            (-m(u, r) / uu).max(0.0).min(1.0)
         } else {
             0.0
         };
@@ -142,7 +142,12 @@ impl ScanMatcher for Mbicp {
         "mbicp"
     }
 
-    fn align(&self, reference: &Reference, current: &ScanPoints, guess: Pose2) -> MatchResult {
+    fn align_plausible(
+        &self,
+        reference: &Reference,
+        current: &ScanPoints,
+        guess: Pose2,
+    ) -> MatchResult {
         if reference.points.is_empty() || current.is_empty() {
             return MatchResult::unmatched(guess);
         }

@@ -30,6 +30,9 @@ pub use kdtree::KdTree;
 pub use level::{LEVEL_TOLERANCE_RAD, LevelLocaliser};
 pub use lorentz::{Lorentz, THESIS_SIGMAS};
 pub use map::{MapBuilder, MapConfig, MatchStats, Placed};
-pub use matcher::{Convergence, MatchResult, MatcherKind, Reference, ScanMatcher, UnknownMatcher};
+pub use matcher::{
+    Convergence, MAX_COORDINATE_M, MatchResult, MatcherKind, Reference, ScanMatcher,
+    UnknownMatcher, plausible,
+};
 pub use mbicp::Mbicp;
 pub use scan::{RangeScan, ScanPoints};

@@ -1,6 +1,7 @@
 //! A range scan as the matchers see it: ranges in metres, and the Cartesian points of the beams
 //! that returned something.
 
+use super::matcher::{MAX_COORDINATE_M, plausible};
 use crate::hardware::LaserScan;
 use crate::time::Stamp;
 use serde::{Deserialize, Serialize};
@@ -51,19 +52,22 @@ impl RangeScan {
         self
     }
 
-    /// Whether beam `i`'s range is a real return.
+    /// Whether beam `i`'s range is a real return: finite, positive, below `range_max` and
+    /// within [`MAX_COORDINATE_M`].
     pub fn returned(&self, i: usize) -> bool {
-        self.ranges
-            .get(i)
-            .is_some_and(|&r| r.is_finite() && r > 0.0 && r < self.range_max)
+        self.ranges.get(i).is_some_and(|&r| {
+            r.is_finite() && r > 0.0 && r < self.range_max && r <= MAX_COORDINATE_M
+        })
     }
 
-    /// The end points of the beams that returned, in beam order.
+    /// The end points of the beams that returned, in beam order (a beam whose angle is not
+    /// finite has no end point).
     pub fn points(&self) -> ScanPoints {
         let mut points = ScanPoints::default();
         for (i, &r) in self.ranges.iter().enumerate() {
-            if self.returned(i) {
-                let (s, c) = (self.angle_min + i as f64 * self.angle_increment).sin_cos();
+            let angle = self.angle_min + i as f64 * self.angle_increment;
+            if self.returned(i) && angle.is_finite() {
+                let (s, c) = angle.sin_cos();
                 points.xy.push([r * c, r * s]);
                 points.beam.push(i);
             }
@@ -106,5 +110,10 @@ impl ScanPoints {
     /// Whether there is no point.
     pub fn is_empty(&self) -> bool {
         self.xy.is_empty()
+    }
+
+    /// Whether every point is finite and within [`MAX_COORDINATE_M`] of the laser.
+    pub fn is_plausible(&self) -> bool {
+        self.xy.iter().all(|&p| plausible(p))
     }
 }

@@ -116,6 +116,20 @@ pub enum LogError {
         /// What was wrong and what was expected.
         message: String,
     },
+    /// The file holds no scan: nothing to map.
+    #[error(
+        "{file}: no scans in this {format:?} log ({lines} lines, {skipped} skipped): expected laser records"
+    )]
+    NoScans {
+        /// The file.
+        file: String,
+        /// The format it was read as.
+        format: LogFormat,
+        /// Lines in the file.
+        lines: usize,
+        /// Lines skipped as unknown.
+        skipped: usize,
+    },
     /// Neither the extension nor the content says which format the file is.
     #[error(
         "{file}: unknown log format: expected a CARMEN .clf, a .script (POS/LASER-RANGE) or a RobotLogger .log"
@@ -125,6 +139,10 @@ pub enum LogError {
         file: String,
     },
 }
+
+/// The largest magnitude of any number in a log: above every timestamp (seconds since 1970),
+/// range and coordinate a robot records.
+pub const MAX_LOG_NUMBER: f64 = 1e12;
 
 /// Where a parser is, for error messages.
 pub(crate) struct Cursor<'a> {
@@ -145,7 +163,10 @@ impl Cursor<'_> {
     fn number(&self, text: Option<&str>, what: &str) -> Result<f64, LogError> {
         let text = text.ok_or_else(|| self.error(format!("missing {what} (line ends early)")))?;
         match text.trim().parse::<f64>() {
-            Ok(v) if v.is_finite() => Ok(v),
+            Ok(v) if v.abs() <= MAX_LOG_NUMBER => Ok(v),
+            Ok(_) => Err(self.error(format!(
+                "{what} `{text}` is not plausible: expected a magnitude up to 1e12"
+            ))),
             _ => Err(self.error(format!("{what} `{text}` is not a number"))),
         }
     }
@@ -175,12 +196,22 @@ pub fn read_log(path: &Path) -> Result<RecordedLog, LogError> {
 }
 
 /// Parses log text in a known format; `file` names it in errors.
+/// A log without a single scan is an error.
 pub fn parse_log(text: &str, format: LogFormat, file: &str) -> Result<RecordedLog, LogError> {
-    match format {
+    let log = match format {
         LogFormat::Carmen => carmen::parse(text, file),
         LogFormat::Script => script::parse(text, file),
         LogFormat::RobotLogger => robotlogger::parse(text, file),
+    }?;
+    if log.scans() == 0 {
+        return Err(LogError::NoScans {
+            file: file.to_string(),
+            format,
+            lines: text.lines().count(),
+            skipped: log.skipped_lines(),
+        });
     }
+    Ok(log)
 }
 
 fn sniff(text: &str) -> Option<LogFormat> {

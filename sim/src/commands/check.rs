@@ -336,6 +336,15 @@ pub struct CheckArgs {
     pub quiet: bool,
 }
 
+/// The message a panic carried.
+fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
+    panic
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| panic.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "(no message)".into())
+}
+
 /// Runs `twin check`.
 pub fn main(args: CheckArgs) -> Result<(), super::CommandError> {
     use super::CommandError;
@@ -366,23 +375,30 @@ pub fn main(args: CheckArgs) -> Result<(), super::CommandError> {
         .par_iter()
         .map(|path| {
             let started = std::time::Instant::now();
-            let outcome = Scenario::load(path)
-                .map_err(|e| e.to_string())
-                .and_then(|scenario| {
-                    let record = run_scenario(&scenario, &RunOptions::default(), |_, _| {})
-                        .map_err(|e| e.to_string())?;
-                    Ok((
-                        evaluate(&scenario, &record),
-                        started.elapsed().as_secs_f64(),
-                    ))
+            let check = || {
+                Scenario::load(path)
+                    .map_err(|e| e.to_string())
+                    .and_then(|scenario| {
+                        let record = run_scenario(&scenario, &RunOptions::default(), |_, _| {})
+                            .map_err(|e| e.to_string())?;
+                        Ok((
+                            evaluate(&scenario, &record),
+                            started.elapsed().as_secs_f64(),
+                        ))
+                    })
+            };
+            // One scenario that crashes is one failed row, not the end of the table.
+            let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(check))
+                .unwrap_or_else(|panic| {
+                    Err(format!("the run crashed: {}", panic_message(&*panic)))
                 });
             bar.inc(1);
             (path.clone(), outcome)
         })
         .collect();
     bar.finish_and_clear();
-    println!("| scenario | checks | passed | failed | seconds |");
-    println!("|---|---|---|---|---|");
+    say!("| scenario | checks | passed | failed | seconds |");
+    say!("|---|---|---|---|---|");
     let mut failed = 0;
     for (path, result) in &results {
         let name = path.file_stem().map_or("?".into(), |s| s.to_string_lossy());
@@ -390,7 +406,7 @@ pub fn main(args: CheckArgs) -> Result<(), super::CommandError> {
             Ok((report, seconds)) => {
                 let bad = report.failures().count();
                 failed += usize::from(bad > 0);
-                println!(
+                say!(
                     "| {name} | {} | {} | {bad} | {seconds:.1} |",
                     report.outcomes.len(),
                     report.outcomes.len() - bad
@@ -398,17 +414,17 @@ pub fn main(args: CheckArgs) -> Result<(), super::CommandError> {
             }
             Err(_) => {
                 failed += 1;
-                println!("| {name} | - | - | error | - |");
+                say!("| {name} | - | - | error | - |");
             }
         }
     }
     for (path, result) in &results {
         match result {
             Ok((report, _)) if !report.passed() => {
-                println!();
-                print!("{report}");
+                say!();
+                say!("{}", report.to_string().trim_end_matches('\n'));
             }
-            Err(e) => println!("\n{}: {e}", path.display()),
+            Err(e) => say!("\n{}: {e}", path.display()),
             _ => {}
         }
     }

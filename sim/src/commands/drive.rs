@@ -396,7 +396,7 @@ pub fn main(args: DriveArgs) -> Result<(), super::CommandError> {
     })?;
     if !args.quiet {
         let p = record.final_odometry;
-        println!(
+        say!(
             "{}: {} steps, {} scans in {:.1} s; final odometry ({:.3} m, {:.3} m, {:.2} deg); {} link event(s)",
             record.scenario,
             record.steps,
@@ -411,7 +411,7 @@ pub fn main(args: DriveArgs) -> Result<(), super::CommandError> {
             && let Some(last) = placed.last()
         {
             let e = last.estimate;
-            println!(
+            say!(
                 "estimate ({kind}): ({:.3} m, {:.3} m, {:.2} deg)",
                 e.x,
                 e.y,
@@ -419,11 +419,14 @@ pub fn main(args: DriveArgs) -> Result<(), super::CommandError> {
             );
         }
         if let Some(recon) = &record.reconstruction {
-            print!("{}", crate::output::reconstruction_report(recon));
+            say!(
+                "{}",
+                crate::output::reconstruction_report(recon).trim_end_matches('\n')
+            );
         }
-        println!("wrote {}", dir.display());
+        say!("wrote {}", dir.display());
         for f in &files {
-            println!("  {}", f.display());
+            say!("  {}", f.display());
         }
     }
     Ok(())

@@ -1,6 +1,7 @@
 //! Localisation over recorded data: `twin map` (a log through the map builder) and `twin match`
 //! (scan pairs as JSON Lines through one matcher).
 
+use crate::config::values::show;
 use crate::output::logmap::{Panel, occupied_cells, write_log_map_svg};
 use crate::output::write_tum;
 use robot::Pose2;
@@ -184,25 +185,59 @@ struct MatchReply {
     micros: f64,
 }
 
-/// Answers one `twin match` input line with one output line (without the newline): the match,
-/// or `{"error": "…"}` naming what is wrong.
-pub fn match_line(line: &str, matcher: &dyn ScanMatcher) -> String {
+/// Answers input line `number` (from 1) of `twin match` with one output line (without the
+/// newline): the match, or `{"error": "line N: …"}` naming what is wrong. Every line is
+/// answered, an empty one too.
+pub fn match_line(number: usize, line: &str, matcher: &dyn ScanMatcher) -> String {
+    let error = |message: String| error_line(&format!("line {number}: {message}"));
+    if line.trim().is_empty() {
+        return error("empty line, expected a scan pair".into());
+    }
     let request: MatchRequest = match serde_json::from_str(line) {
         Ok(r) => r,
-        Err(e) => return error_line(&format!("not a scan pair: {e}")),
-    };
-    for (name, scan) in [("ref", &request.reference), ("cur", &request.cur)] {
-        if !(scan.angle_min.is_finite() && scan.angle_increment.is_finite()) {
-            return error_line(&format!(
-                "{name}: angle_min and angle_increment must be finite"
+        // serde_json counts within the line: its "line 1" is this line.
+        Err(e) => {
+            return error(format!(
+                "not a scan pair: {} at column {}",
+                strip_position(&e.to_string()),
+                e.column()
             ));
         }
-        if scan.range_max.is_nan() || scan.range_max <= 0.0 {
-            return error_line(&format!("{name}: range_max must be positive"));
+    };
+    let turn = std::f64::consts::TAU;
+    for (name, scan) in [("ref", &request.reference), ("cur", &request.cur)] {
+        if !(scan.angle_min.is_finite() && scan.angle_min.abs() <= turn) {
+            return error(format!(
+                "{name}.angle_min: expected radians within ±2π, found {}",
+                show(scan.angle_min)
+            ));
+        }
+        let increment = scan.angle_increment.abs();
+        if !(increment > 1e-9 && increment <= turn) {
+            return error(format!(
+                "{name}.angle_increment: expected radians, non-zero and within ±2π, found {}",
+                show(scan.angle_increment)
+            ));
+        }
+        if !(scan.range_max > 0.0 && scan.range_max.is_finite()) {
+            return error(format!(
+                "{name}.range_max: expected a positive number of metres, found {}",
+                show(scan.range_max)
+            ));
+        }
+        if let Some((i, r)) = scan.ranges.iter().enumerate().find(|(_, r)| r.is_nan()) {
+            return error(format!("{name}.ranges[{i}]: expected metres, found {r}"));
         }
     }
-    if request.guess.iter().any(|v| !v.is_finite()) {
-        return error_line("guess: expected three finite numbers [x, y, theta]");
+    let limit = robot::localization::MAX_COORDINATE_M;
+    let [x, y, theta] = request.guess;
+    if !(x.abs() <= limit && y.abs() <= limit && theta.abs() <= limit) {
+        return error(format!(
+            "guess: expected [x, y, theta] with x and y within ±{limit} m and theta within ±{limit} rad, found [{}, {}, {}]",
+            show(x),
+            show(y),
+            show(theta)
+        ));
     }
     let guess = Pose2::new(request.guess[0], request.guess[1], request.guess[2]);
     let clock = Instant::now();
@@ -222,6 +257,13 @@ pub fn match_line(line: &str, matcher: &dyn ScanMatcher) -> String {
 
 fn error_line(message: &str) -> String {
     serde_json::json!({ "error": message }).to_string()
+}
+
+/// A serde_json message without its " at line L column C" (the caller says where).
+fn strip_position(message: &str) -> &str {
+    message
+        .rfind(" at line ")
+        .map_or(message, |at| &message[..at])
 }
 
 /// `twin map`: build a 2D map from a recorded log (CARMEN .clf, .script, RobotLogger .log) by
@@ -287,7 +329,7 @@ pub fn map_main(args: MapArgs) -> Result<(), super::CommandError> {
             source,
         })?;
     if !args.quiet {
-        println!(
+        say!(
             "{name}: {} scans matched with {} in {:.2} s ({:.2} ms per scan, {:.1} iterations per match); {} lines skipped",
             summary.scans,
             args.matcher,
@@ -296,13 +338,14 @@ pub fn map_main(args: MapArgs) -> Result<(), super::CommandError> {
             summary.stats.mean_iterations,
             log.skipped_lines()
         );
-        println!(
+        say!(
             "map sharpness: {} cells of 5 cm occupied by the estimate's map, {} by odometry's",
-            summary.estimate_cells, summary.odometry_cells
+            summary.estimate_cells,
+            summary.odometry_cells
         );
-        println!("wrote {}", dir.display());
+        say!("wrote {}", dir.display());
         for f in &files {
-            println!("  {}", f.display());
+            say!("  {}", f.display());
         }
     }
     Ok(())
@@ -329,12 +372,13 @@ pub fn match_main(args: MatchArgs) -> Result<(), super::CommandError> {
     let stdin = std::io::stdin();
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     let io = |what| move |source| CommandError::Io { what, source };
-    for line in stdin.lock().lines() {
+    for (k, line) in stdin.lock().split(b'\n').enumerate() {
         let line = line.map_err(io("reading stdin"))?;
-        if line.trim().is_empty() {
-            continue;
-        }
-        writeln!(out, "{}", match_line(&line, matcher.as_ref())).map_err(io("writing stdout"))?;
+        let reply = match std::str::from_utf8(&line) {
+            Ok(line) => match_line(k + 1, line.trim_end_matches('\r'), matcher.as_ref()),
+            Err(e) => error_line(&format!("line {}: not UTF-8: {e}", k + 1)),
+        };
+        writeln!(out, "{reply}").map_err(io("writing stdout"))?;
         out.flush().map_err(io("writing stdout"))?;
     }
     Ok(())

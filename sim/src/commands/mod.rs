@@ -9,6 +9,17 @@
 //! - [`montecarlo`]: `twin montecarlo`, the thesis's Table 5.1 study, parallel, resumable and
 //!   shardable.
 
+/// `println!` for a command's report on standard output, ending the program quietly when the
+/// reader has gone (`twin run … | head -1`) instead of panicking on the closed pipe.
+macro_rules! say {
+    () => {
+        $crate::commands::say_line(format_args!(""))
+    };
+    ($($arg:tt)*) => {
+        $crate::commands::say_line(format_args!($($arg)*))
+    };
+}
+
 pub mod check;
 pub mod drive;
 pub mod map;
@@ -20,6 +31,24 @@ pub mod serve;
 use crate::config::ConfigError;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
+
+/// Writes one line to standard output (see `say!`); a closed pipe ends the program with
+/// status 0, as the reader wanted no more.
+pub fn say_line(args: std::fmt::Arguments<'_>) {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    let written = out
+        .write_fmt(args)
+        .and_then(|()| out.write_all(b"\n"))
+        .and_then(|()| out.flush());
+    if let Err(e) = written {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(0);
+        }
+        eprintln!("error: writing standard output: {e}");
+        std::process::exit(1);
+    }
+}
 
 /// Why a command failed: what the `twin` binary prints after `error:`.
 #[derive(Debug, thiserror::Error)]

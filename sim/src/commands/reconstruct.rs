@@ -394,10 +394,13 @@ pub fn main(args: ReconstructArgs) -> Result<(), super::CommandError> {
         },
     )?;
     if !args.quiet {
-        print!("{}", crate::output::reconstruction_report(&recon));
-        println!("wrote {}", out.display());
+        say!(
+            "{}",
+            crate::output::reconstruction_report(&recon).trim_end_matches('\n')
+        );
+        say!("wrote {}", out.display());
         for f in &files {
-            println!("  {}", f.display());
+            say!("  {}", f.display());
         }
     }
     Ok(())

@@ -290,7 +290,7 @@ pub fn main(args: RunArgs) -> Result<(), super::CommandError> {
         }
     })?;
     if !args.quiet {
-        println!(
+        say!(
             "{}: {:.1} s simulated in {:.3} s ({:.0}x real time), {} scans, {:.2} m driven",
             record.scenario,
             record.sim_seconds(),
@@ -299,7 +299,7 @@ pub fn main(args: RunArgs) -> Result<(), super::CommandError> {
             record.scans.len(),
             record.distance_m
         );
-        println!(
+        say!(
             "final odometry error {:.3} m, {:.2} deg; {} collision(s); seed {}",
             record.final_odometry_error_m(),
             record.final_odometry_error_deg(),
@@ -308,22 +308,25 @@ pub fn main(args: RunArgs) -> Result<(), super::CommandError> {
         );
         if let Some(loc) = &record.localisation {
             let (final_m, final_deg, rms_m, rms_deg) = crate::output::estimate_errors(&record, loc);
-            println!(
+            say!(
                 "estimate ({}): final error {final_m:.3} m, {final_deg:.2} deg; RMS {rms_m:.3} m, {rms_deg:.2} deg",
                 loc.matcher
             );
         }
         if let Some(recon) = &record.reconstruction {
-            print!("{}", crate::output::reconstruction_report(recon));
+            say!(
+                "{}",
+                crate::output::reconstruction_report(recon).trim_end_matches('\n')
+            );
         }
-        println!("wrote {}", written.dir.display());
+        say!("wrote {}", written.dir.display());
         for f in &written.files {
-            println!("  {}", f.display());
+            say!("  {}", f.display());
         }
     }
     let report = super::check::evaluate(&scenario, &record);
     if !report.outcomes.is_empty() && (!args.quiet || !report.passed()) {
-        print!("{report}");
+        say!("{}", report.to_string().trim_end_matches('\n'));
     }
     let failed = report.failures().count();
     if failed > 0 {

@@ -217,6 +217,11 @@ impl Face {
         stats.connections != before
     }
 
+    /// Whether a client is there (a pseudo-terminal always is).
+    fn connected(&self) -> bool {
+        !matches!(self, Face::Tcp { client: None, .. })
+    }
+
     /// Reads what has arrived (nothing if nobody is connected).
     fn read(&mut self, buf: &mut [u8], log: &mut Vec<String>) -> usize {
         let result = match self {
@@ -315,6 +320,11 @@ struct LineFace {
     discarding: bool,
     rx_free: Stamp,
     out: VecDeque<(Stamp, u8)>,
+    /// The last byte taken from the board was not a newline: a reply is half out.
+    mid_line: bool,
+    /// Drop the board's output up to the end of the reply it is in (a new client starts on a
+    /// fresh line).
+    skip_to_newline: bool,
     stats: FaceStats,
 }
 
@@ -328,17 +338,31 @@ impl LineFace {
             discarding: false,
             rx_free: Stamp::ZERO,
             out: VecDeque::new(),
+            mid_line: false,
+            skip_to_newline: false,
             stats: FaceStats::default(),
         }
+    }
+
+    /// Forgets the link's traffic when a client comes or goes: the unfinished line it typed,
+    /// the lines the board has not read yet and every reply not yet sent. The board's state
+    /// (motors, counters) stays, as on the robot.
+    fn forget_link<F: MainLoop>(&mut self, board: &mut Board<F>) {
+        self.line.clear();
+        self.discarding = false;
+        self.stats.bytes_dropped_out += self.out.len() as u64;
+        self.out.clear();
+        self.stats.bytes_dropped_out += board.forget_link() as u64;
+        self.skip_to_newline = self.mid_line;
     }
 
     /// Moves bytes both ways at `now`.
     fn pump<F: MainLoop>(&mut self, now: Stamp, board: &mut Board<F>, log: &mut Vec<String>) {
         let mut notes = Vec::new();
+        let was_connected = self.face.connected();
         if self.face.accept(&mut notes, &mut self.stats) {
-            // A new client does not inherit its predecessor's unfinished line.
-            self.line.clear();
-            self.discarding = false;
+            // A new client inherits nothing of its predecessor's.
+            self.forget_link(board);
         }
         let backlog_limit = self.byte * RX_BACKLOG as u32;
         let mut buf = [0u8; 512];
@@ -375,7 +399,16 @@ impl LineFace {
                 }
             }
         }
+        if was_connected && !self.face.connected() {
+            self.forget_link(board);
+        }
         while let Some(byte) = board.pop_output() {
+            self.mid_line = byte.1 != b'\n';
+            if self.skip_to_newline {
+                self.skip_to_newline = self.mid_line;
+                self.stats.bytes_dropped_out += 1;
+                continue;
+            }
             if self.out.len() == MAX_PENDING_OUT {
                 self.out.pop_front();
                 self.stats.bytes_dropped_out += 1;
@@ -488,6 +521,11 @@ impl LmsEmulator {
         bytes
     }
 
+    /// Forgets a requested scan not yet sent (its client has gone).
+    pub fn forget_request(&mut self) {
+        self.requested = false;
+    }
+
     /// Whether the next scan should be sent (streaming, or one was requested).
     pub fn wants_scan(&self) -> bool {
         self.mode == sick::MODE_STREAM_VALUES || self.requested
@@ -540,10 +578,22 @@ impl LmsFace {
         }
     }
 
+    /// Forgets the link's traffic when a client comes or goes: its undecoded bytes, a scan it
+    /// requested and every telegram not yet sent (the LMS's mode and configuration stay).
+    fn forget_link(&mut self, now: Stamp) {
+        self.decoder.clear();
+        self.lms.forget_request();
+        self.stats.bytes_dropped_out += self.out_bytes as u64;
+        self.out.clear();
+        self.out_bytes = 0;
+        self.tx_free = now;
+    }
+
     fn pump(&mut self, now: Stamp, twin: &mut Twin, log: &mut Vec<String>) {
         let mut notes = Vec::new();
+        let was_connected = self.face.connected();
         if self.face.accept(&mut notes, &mut self.stats) {
-            self.decoder.clear();
+            self.forget_link(now);
         }
         let mut buf = [0u8; 512];
         for _ in 0..64 {
@@ -567,6 +617,9 @@ impl LmsFace {
                     Frame::Ack | Frame::Nak => {}
                 }
             }
+        }
+        if was_connected && !self.face.connected() {
+            self.forget_link(now);
         }
         // Scans whose telegram has reached the host by now.
         while let Some(delivery) = twin.next_scan_delivery().filter(|d| *d <= now) {
@@ -880,12 +933,14 @@ pub fn main(args: ServeArgs) -> Result<(), super::CommandError> {
         laser: args.laser,
     };
     let mut server = Server::new(twin, &options)?;
-    println!(
+    say!(
         "serving {} ({}) at {}x real time",
-        scenario.name, scenario.robot.name, options.speed
+        scenario.name,
+        scenario.robot.name,
+        options.speed
     );
     for (device, address) in server.addresses() {
-        println!("{device:<9} {address}");
+        say!("{device:<9} {address}");
     }
     std::io::stdout()
         .flush()
@@ -893,7 +948,16 @@ pub fn main(args: ServeArgs) -> Result<(), super::CommandError> {
             what: "writing stdout",
             source,
         })?;
-    let stop = std::sync::atomic::AtomicBool::new(false);
+    // SIGINT and SIGTERM end the run like --duration does: the statistics are printed.
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        signal_hook::flag::register(signal, std::sync::Arc::clone(&stop)).map_err(|source| {
+            CommandError::Io {
+                what: "installing the signal handlers",
+                source,
+            }
+        })?;
+    }
     let quiet = args.quiet;
     server.run(&stop, duration, |t, line| {
         if !quiet {
@@ -902,7 +966,7 @@ pub fn main(args: ServeArgs) -> Result<(), super::CommandError> {
     });
     if !quiet {
         for (device, stats) in server.stats() {
-            println!(
+            say!(
                 "{device}: {} connection(s), {} bytes in ({} dropped), {} messages, {} bytes out ({} lost)",
                 stats.connections,
                 stats.bytes_in,

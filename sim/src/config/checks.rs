@@ -197,8 +197,13 @@ pub(super) fn parse_checks(
     for (i, spanned) in files.iter().enumerate() {
         let f = spanned.get_ref();
         let field = |name: &str| Some(format!("check[{i}].{name}"));
-        let error =
-            |name: &str, message: String| source.error(spanned.span(), field(name), message);
+        // At the key's own line when the table writes it, else at the table.
+        let error = |name: &str, message: String| {
+            let span = source
+                .key_in(spanned.span(), name)
+                .unwrap_or_else(|| spanned.span());
+            source.error(span, field(name), message)
+        };
         let placement = match f.placement.as_deref() {
             None => ModelPlacement::Main,
             Some("estimate") => ModelPlacement::Estimate,
@@ -286,10 +291,14 @@ pub(super) fn parse_checks(
         ];
         for (name, present, allowed) in given {
             if present && !allowed {
-                return Err(error(
-                    name.split(' ').next().unwrap_or(name),
-                    format!("a `{}` check takes no {name}", f.kind),
-                ));
+                // The key actually written, of the pair.
+                let (lo, hi) = name.split_once(" / ").unwrap_or((name, name));
+                let key = if source.key_in(spanned.span(), lo).is_some() {
+                    lo
+                } else {
+                    hi
+                };
+                return Err(error(key, format!("a `{}` check takes no {name}", f.kind)));
             }
         }
         if !given.iter().any(|(_, present, _)| *present) {
@@ -365,23 +374,37 @@ pub(super) fn parse_checks(
                 max: f.max_m,
             }
         };
-        let all = [
-            f.min_m,
-            f.max_m,
-            f.min_deg,
-            f.max_deg,
-            f.min,
-            f.max,
-            f.min_share,
-            f.max_share,
-            f.min_m2,
-            f.max_m2,
+        let pairs = [
+            (("min_m", f.min_m), ("max_m", f.max_m)),
+            (("min_deg", f.min_deg), ("max_deg", f.max_deg)),
+            (("min", f.min), ("max", f.max)),
+            (("min_share", f.min_share), ("max_share", f.max_share)),
+            (("min_m2", f.min_m2), ("max_m2", f.max_m2)),
         ];
-        if all.iter().flatten().any(|v| !v.is_finite() || *v < 0.0) {
-            return Err(error(
-                "kind",
-                "bounds must be finite and not negative".into(),
-            ));
+        for ((min_name, min), (max_name, max)) in pairs {
+            for (name, value) in [(min_name, min), (max_name, max)] {
+                if let Some(v) = value
+                    && !(0.0..=1e9).contains(&v)
+                {
+                    return Err(error(
+                        name,
+                        format!(
+                            "expected a bound from 0 to 1e9, found {}",
+                            super::values::show(v)
+                        ),
+                    ));
+                }
+            }
+            if let (Some(lo), Some(hi)) = (min, max)
+                && lo > hi
+            {
+                return Err(error(
+                    min_name,
+                    format!(
+                        "{min_name} = {lo} is above {max_name} = {hi}: the check could never pass"
+                    ),
+                ));
+            }
         }
         checks.push(Check {
             kind,

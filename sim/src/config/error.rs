@@ -131,15 +131,73 @@ impl Source {
         }
     }
 
-    /// The key assigned on the line containing `offset` (`x = 1.0` gives `x`).
+    /// Where the value of `key` is written in the table starting at `span` (a table's span, or
+    /// only its `[[header]]`'s): the span of the value on the line `key = value` before the
+    /// next table's header, if there is one.
+    pub fn key_in(&self, span: Range<usize>, key: &str) -> Option<Range<usize>> {
+        let start = span.start.min(self.text.len());
+        let mut offset = start;
+        for (k, line) in self.text.get(start..)?.split_inclusive('\n').enumerate() {
+            let trimmed = line.trim_start();
+            if k > 0 && trimmed.starts_with('[') && offset >= span.end {
+                return None;
+            }
+            if let Some(rest) = trimmed.strip_prefix(key)
+                && let Some(value) = rest.trim_start().strip_prefix('=')
+            {
+                let at = offset + (line.len() - value.trim_start().len());
+                let length = value.trim().len();
+                return Some(at..at + length);
+            }
+            offset += line.len();
+        }
+        None
+    }
+
+    /// The key assigned on the line containing `offset`, as a dotted path with the table it is
+    /// in (`x = 1.0` under `[start]` gives `start.x`; under the third `[[check]]`,
+    /// `check[2].x`).
     fn key_at(&self, offset: usize) -> Option<String> {
-        let start = self.text[..offset.min(self.text.len())]
-            .rfind('\n')
-            .map_or(0, |i| i + 1);
+        let before = &self.text[..offset.min(self.text.len())];
+        let start = before.rfind('\n').map_or(0, |i| i + 1);
         let line = self.text[start..].lines().next()?;
         let (key, _) = line.split_once('=')?;
         let key = key.trim();
-        (!key.is_empty() && !key.starts_with('[')).then(|| key.to_string())
+        if key.is_empty() || key.starts_with('[') {
+            return None;
+        }
+        let header = before[..start]
+            .lines()
+            .rev()
+            .map(str::trim)
+            .find(|l| l.starts_with('['));
+        Some(match header {
+            Some(h) if h.starts_with("[[") => {
+                let name = h
+                    .trim_start_matches('[')
+                    .split(']')
+                    .next()
+                    .unwrap_or("")
+                    .trim();
+                let header = format!("[[{name}]]");
+                let index = before[..start]
+                    .lines()
+                    .filter(|l| l.trim().starts_with(&header))
+                    .count()
+                    .saturating_sub(1);
+                format!("{name}[{index}].{key}")
+            }
+            Some(h) => {
+                let name = h
+                    .trim_start_matches('[')
+                    .split(']')
+                    .next()
+                    .unwrap_or("")
+                    .trim();
+                format!("{name}.{key}")
+            }
+            None => key.to_string(),
+        })
     }
 }
 

@@ -6,7 +6,7 @@
 //! base of the thesis). Each names its sources.
 
 use super::error::{ConfigError, Source};
-use super::values::{Angle, Finite, NonNegative, Positive, UnitInterval};
+use super::values::{Angle, Finite, NonNegative, Positive, Seconds, Sigma, UnitInterval};
 use robot::mount::{HeadGeometry, LaserMount};
 use robot::{DriveGeometry, Pose2};
 use serde::Deserialize;
@@ -107,11 +107,11 @@ pub struct LaserDescription {
     /// Maximum range and no-return value, metres.
     pub range_max_m: Positive,
     /// Standard deviation of the range noise, metres.
-    pub sigma_m: NonNegative,
+    pub sigma_m: Sigma,
     /// Bit rate of the laser's serial line.
     pub baud: u32,
     /// Time the mirror takes for one scan at this resolution, seconds.
-    pub sweep_s: Positive,
+    pub sweep_s: Seconds,
     /// Bytes of one scan telegram on the serial line.
     pub telegram_bytes: u32,
 }
@@ -127,9 +127,9 @@ struct LaserFile {
     beams: u16,
     fov_deg: Positive,
     range_max_m: Positive,
-    sigma_m: NonNegative,
+    sigma_m: Sigma,
     baud: u32,
-    sweep_s: Positive,
+    sweep_s: Seconds,
     telegram_bytes: u32,
 }
 
@@ -155,7 +155,7 @@ pub struct SonarDescription {
     /// Incidence beyond which a smooth surface reflects the burst away, degrees.
     pub critical_deg: Angle,
     /// Standard deviation of the range noise, metres.
-    pub sigma_m: NonNegative,
+    pub sigma_m: Sigma,
     /// Height of the transducers above the floor, metres.
     pub height_m: Positive,
 }
@@ -259,13 +259,46 @@ impl RobotDescription {
                 ),
             ));
         }
-        for (field, baud) in [
+        let mut bauds = vec![
             ("drive.serial_baud", file.drive.serial_baud),
             ("laser.baud", file.laser.baud),
-        ] {
-            if baud == 0 {
-                return Err(invalid(field, "expected a bit rate above 0".into()));
+        ];
+        if let Some(pt) = &file.pan_tilt {
+            bauds.push(("pan_tilt.serial_baud", pt.serial_baud));
+        }
+        for (field, baud) in bauds {
+            if !(300..=10_000_000).contains(&baud) {
+                return Err(invalid(
+                    field,
+                    format!("expected a bit rate from 300 to 10000000, found {baud}"),
+                ));
             }
+        }
+        if file.laser.beams > 10_000 {
+            return Err(invalid(
+                "laser.beams",
+                format!("expected at most 10000 beams, found {}", file.laser.beams),
+            ));
+        }
+        // Two bytes a reading on the wire, plus the telegram's frame.
+        let least = 2 * u32::from(file.laser.beams);
+        if !(least..=1_000_000).contains(&file.laser.telegram_bytes) {
+            return Err(invalid(
+                "laser.telegram_bytes",
+                format!(
+                    "expected at least 2 bytes per beam ({least}) and at most 1000000, found {}",
+                    file.laser.telegram_bytes
+                ),
+            ));
+        }
+        if file.drive.counts_per_rotor_turn > 1_000_000 {
+            return Err(invalid(
+                "drive.counts_per_rotor_turn",
+                format!(
+                    "expected at most 1000000 counts per turn, found {}",
+                    file.drive.counts_per_rotor_turn
+                ),
+            ));
         }
         let laser = resolve_laser(&file, &invalid)?;
         if let Some(sonar) = &file.sonar {
@@ -273,6 +306,12 @@ impl RobotDescription {
                 return Err(invalid(
                     "sonar.count",
                     format!("expected 1..=16 transducers, found {}", sonar.count),
+                ));
+            }
+            if sonar.rays == 0 {
+                return Err(invalid(
+                    "sonar.rays",
+                    "expected at least 1 ray per cone, found 0".into(),
                 ));
             }
             if sonar.min_range_m.get() >= sonar.max_range_m.get() {
@@ -485,10 +524,14 @@ mod tests {
             .unwrap()
             + 1;
         assert_eq!(err.line, Some(line), "{err}");
-        assert_eq!(err.field.as_deref(), Some("wheel_diameter_m"), "{err}");
+        assert_eq!(
+            err.field.as_deref(),
+            Some("drive.wheel_diameter_m"),
+            "{err}"
+        );
         assert!(
             err.message
-                .contains("expected a positive number, found -0.195"),
+                .contains("expected a positive number from 1e-12 to 1e6, found -0.195"),
             "{err}"
         );
     }

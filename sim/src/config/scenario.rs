@@ -43,7 +43,9 @@
 use super::checks::{Check, CheckFile, parse_checks};
 use super::error::{ConfigError, Source, resolve};
 use super::robot_file::RobotDescription;
-use super::values::{NonNegative, Positive, RelativeError, UnitInterval};
+use super::values::{
+    NonNegative, Positive, RelativeError, Seconds, SecondsOrZero, Sigma, UnitInterval,
+};
 use super::world::{StartFile, WorldDescription};
 use crate::config::Outliers;
 use core::time::Duration;
@@ -167,19 +169,11 @@ impl Scenario {
         let file: ScenarioFile = source.parse()?;
         let mut world = load_named(&source, &file.world, "world", |p| WorldDescription::load(p))?;
         if let Some(start) = &file.start {
-            // Put the robot elsewhere in the same world; the twin checks it is clear of walls.
-            let (lo, hi) = world.bounds();
-            let inside = |v: f64, k: usize| v.is_finite() && v >= lo[k] && v <= hi[k];
-            if !(inside(start.x, 0) && inside(start.y, 1) && start.heading_deg.is_finite()) {
-                return Err(source.error_in_file(
-                    Some("start".into()),
-                    format!(
-                        "expected x in [{}, {}], y in [{}, {}] (the world's extent) and a finite heading, found x = {}, y = {}, heading_deg = {}",
-                        lo[0], hi[0], lo[1], hi[1], start.x, start.y, start.heading_deg
-                    ),
-                ));
-            }
-            world.start = robot::Pose2::new(start.x, start.y, start.heading_deg.to_radians());
+            // Put the robot elsewhere in the same world, by the world's own rule; the twin
+            // checks it is clear of walls.
+            world.start = world
+                .check_start(start)
+                .map_err(|message| source.error_in_file(Some("start".into()), message))?;
         }
         let robot = load_named(&source, &file.robot, "robot", |p| RobotDescription::load(p))?;
         let mut noise = NoiseSettings::defaults_for(&robot);
@@ -217,11 +211,11 @@ impl Scenario {
         let steps: Vec<Step> = (0..repeat).flat_map(|_| once.iter().copied()).collect();
         let mut tour = TourConfig::default();
         if let Some(t) = &file.tour {
-            let poll = Duration::from_secs_f64(t.poll_s.map_or(0.05, Positive::get));
+            let poll = Duration::from_secs_f64(t.poll_s.map_or(0.05, Seconds::get));
             tour.poll = poll;
             tour.pacing = match t.pacing.as_ref().map(|p| p.get_ref().as_str()) {
                 None | Some("stop-and-go") => Pacing::StopAndGo {
-                    settle: Duration::from_secs_f64(t.settle_s.map_or(0.1, NonNegative::get)),
+                    settle: Duration::from_secs_f64(t.settle_s.map_or(0.1, SecondsOrZero::get)),
                 },
                 Some("polling") => Pacing::Polling { period: poll },
                 Some(other) => {
@@ -465,18 +459,18 @@ struct SonarFile {
 #[serde(deny_unknown_fields)]
 struct TourFile {
     pacing: Option<Spanned<String>>,
-    settle_s: Option<NonNegative>,
-    poll_s: Option<Positive>,
+    settle_s: Option<SecondsOrZero>,
+    poll_s: Option<Seconds>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct NoiseFile {
-    slip_sigma_sqrt_m: Option<NonNegative>,
+    slip_sigma_sqrt_m: Option<Sigma>,
     wheel_diameter_ratio_error: Option<RelativeError>,
     wheel_scale_error: Option<RelativeError>,
     track_error: Option<RelativeError>,
-    laser_sigma_m: Option<NonNegative>,
+    laser_sigma_m: Option<Sigma>,
     outliers: Option<Spanned<OutliersFile>>,
 }
 
@@ -494,7 +488,7 @@ impl NoiseFile {
         };
         set(
             &mut noise.slip_sigma_sqrt_m,
-            self.slip_sigma_sqrt_m.map(NonNegative::get),
+            self.slip_sigma_sqrt_m.map(Sigma::get),
         );
         set(
             &mut noise.wheel_diameter_ratio_error,
@@ -508,10 +502,7 @@ impl NoiseFile {
             &mut noise.track_error,
             self.track_error.map(RelativeError::get),
         );
-        set(
-            &mut noise.laser_sigma_m,
-            self.laser_sigma_m.map(NonNegative::get),
-        );
+        set(&mut noise.laser_sigma_m, self.laser_sigma_m.map(Sigma::get));
         let Some(o) = &self.outliers else {
             return Ok(());
         };

@@ -41,7 +41,7 @@
 //! Frames follow REP-103: x and y in metres in the world frame, headings counter-clockwise.
 
 use super::error::{ConfigError, Source};
-use super::values::{Angle, UnitInterval};
+use super::values::{Angle, UnitInterval, show};
 use robot::Pose2;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -178,23 +178,15 @@ impl WorldDescription {
 
     fn from_source(source: &Source) -> Result<Self, ConfigError> {
         let file: WorldFile = source.parse()?;
-        let start = Pose2::new(
-            file.start.x,
-            file.start.y,
-            file.start.heading_deg.to_radians(),
-        );
-        if ![start.x, start.y, start.theta]
-            .iter()
-            .all(|v| v.is_finite())
-        {
-            return Err(source.error_in_file(Some("start".into()), "the start pose must be finite"));
-        }
         let ceiling = *file.ceiling_m.get_ref();
-        if !(ceiling > 0.0 && ceiling.is_finite()) {
+        if !(ceiling > 0.0 && ceiling <= MAX_HEIGHT_M) {
             return Err(source.error(
                 file.ceiling_m.span(),
                 Some("ceiling_m".into()),
-                format!("expected a positive height, found {ceiling}"),
+                format!(
+                    "expected a positive height up to {MAX_HEIGHT_M} m, found {}",
+                    show(ceiling)
+                ),
             ));
         }
         let heights = |z: &Option<Spanned<[f64; 2]>>, field: Option<String>| match z {
@@ -287,15 +279,41 @@ impl WorldDescription {
         let optics = file
             .optics
             .map_or_else(Optics::default, |o| o.into_optics());
-        Ok(WorldDescription {
+        let mut world = WorldDescription {
             name: file.name,
             description: file.description,
-            start,
+            start: Pose2::IDENTITY,
             walls,
             ceiling,
             optics,
             path: source.path.clone(),
-        })
+        };
+        world.start = world
+            .check_start(&file.start)
+            .map_err(|message| source.error_in_file(Some("start".into()), message))?;
+        Ok(world)
+    }
+
+    /// `start` as a pose, if it lies within the world's extent with a plausible heading: the
+    /// same rule for a world's `[start]` and a scenario's. (The twin checks it is clear of
+    /// walls when it places the robot.)
+    pub(super) fn check_start(&self, start: &StartFile) -> Result<Pose2, String> {
+        let (lo, hi) = self.wall_bounds();
+        let inside = |v: f64, k: usize| v.is_finite() && v >= lo[k] && v <= hi[k];
+        if inside(start.x, 0) && inside(start.y, 1) && start.heading_deg.abs() <= 3600.0 {
+            Ok(Pose2::new(start.x, start.y, start.heading_deg.to_radians()))
+        } else {
+            Err(format!(
+                "expected x in [{}, {}], y in [{}, {}] (the world's walls and 20 m around) and a heading within ±3600 degrees, found x = {}, y = {}, heading_deg = {}",
+                lo[0],
+                hi[0],
+                lo[1],
+                hi[1],
+                show(start.x),
+                show(start.y),
+                show(start.heading_deg)
+            ))
+        }
     }
 
     /// Every straight piece of surface with its material.
@@ -303,6 +321,30 @@ impl WorldDescription {
         self.walls
             .iter()
             .flat_map(|w| w.segments().map(move |(a, b)| (a, b, w.material)))
+    }
+
+    /// The smallest axis-aligned box holding every wall, grown by [`START_MARGIN_M`] (the
+    /// coordinate limits when there is no wall), `(min, max)`.
+    fn wall_bounds(&self) -> ([f64; 2], [f64; 2]) {
+        let points = self.walls.iter().flat_map(|w| w.points.iter());
+        let (lo, hi) = points.fold(
+            ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
+            |(lo, hi), p| {
+                (
+                    [lo[0].min(p[0]), lo[1].min(p[1])],
+                    [hi[0].max(p[0]), hi[1].max(p[1])],
+                )
+            },
+        );
+        if lo[0] <= hi[0] {
+            // Open space around the walls is still the world (a test rig of one wall).
+            (
+                lo.map(|v| v - START_MARGIN_M),
+                hi.map(|v| v + START_MARGIN_M),
+            )
+        } else {
+            ([-MAX_COORDINATE_M; 2], [MAX_COORDINATE_M; 2])
+        }
     }
 
     /// The smallest axis-aligned box holding every wall and the start, `(min, max)`.
@@ -351,15 +393,28 @@ fn rectangle(
     field: &dyn Fn(&str) -> Option<String>,
 ) -> Result<Rectangle, ConfigError> {
     let [w, h] = *size.get_ref();
-    if !(w > 0.0 && h > 0.0 && w.is_finite() && h.is_finite()) {
+    let size_ok = |v: f64| v >= 1e-3 && v <= MAX_COORDINATE_M;
+    if !(size_ok(w) && size_ok(h)) {
         return Err(source.error(
             size.span(),
             field("size"),
-            format!("expected a positive finite size, found [{w}, {h}]"),
+            format!(
+                "expected a size from 0.001 to {MAX_COORDINATE_M} m each way, found [{w}, {h}]"
+            ),
         ));
     }
     let c = *center.get_ref();
     check_finite(source, center.span(), &c, field("center"))?;
+    if !(heading_deg.abs() <= 3600.0) {
+        return Err(source.error(
+            center.span(),
+            field("heading_deg"),
+            format!(
+                "expected a heading within ±3600 degrees, found {}",
+                show(heading_deg)
+            ),
+        ));
+    }
     Ok(Rectangle {
         pose: Pose2::new(c[0], c[1], heading_deg.to_radians()),
         size: [w, h],
@@ -384,17 +439,28 @@ fn material(
     })
 }
 
+/// The farthest a world's point may lie from its origin, metres: 100 km is any building, and
+/// keeps every coordinate exact enough in the single precision of the collision engine.
+pub const MAX_COORDINATE_M: f64 = 1e5;
+/// How far outside the box of its walls a robot may start, metres.
+pub const START_MARGIN_M: f64 = 20.0;
+/// The highest ceiling, metres.
+pub const MAX_HEIGHT_M: f64 = 1e3;
+
 fn check_finite(
     source: &Source,
     span: std::ops::Range<usize>,
     values: &[f64],
     field: Option<String>,
 ) -> Result<(), ConfigError> {
-    match values.iter().find(|v| !v.is_finite()) {
+    match values.iter().find(|v| !(v.abs() <= MAX_COORDINATE_M)) {
         Some(v) => Err(source.error(
             span,
             field,
-            format!("coordinates must be finite numbers, found {v}"),
+            format!(
+                "expected coordinates within ±{MAX_COORDINATE_M} m, found {}",
+                show(*v)
+            ),
         )),
         None => Ok(()),
     }

@@ -137,7 +137,7 @@ impl SonarModel {
 mod tests {
     use super::*;
     use crate::config::WorldDescription;
-    use crate::config::values::{Angle, Finite, NonNegative, Positive};
+    use crate::config::values::{Angle, Finite, Positive, Sigma};
 
     fn ring() -> SonarModel {
         SonarModel::new(&SonarDescription {
@@ -149,7 +149,7 @@ mod tests {
             min_range_m: Positive(0.1016),
             max_range_m: Positive(12.19),
             critical_deg: Angle(25.0),
-            sigma_m: NonNegative(0.0),
+            sigma_m: Sigma(0.0),
             height_m: Positive(0.2),
         })
     }

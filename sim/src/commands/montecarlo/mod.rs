@@ -134,6 +134,17 @@ impl Shard {
     pub fn owns(&self, i: u64) -> bool {
         i % self.count == self.index
     }
+
+    /// This shard's trials of `0..total`, in order, computed as they are asked for (a study
+    /// of 10⁹ trials costs no memory).
+    pub fn trials(&self, total: u64) -> impl Iterator<Item = u64> + Clone {
+        (self.index..total).step_by(self.count.max(1) as usize)
+    }
+
+    /// How many of `0..total` are this shard's.
+    pub fn count_of(&self, total: u64) -> u64 {
+        total.saturating_sub(self.index).div_ceil(self.count.max(1))
+    }
 }
 
 impl std::fmt::Display for Shard {
@@ -287,7 +298,7 @@ impl<'a> Trials<'a> {
     pub fn new(study: &'a Study) -> Self {
         // The study's laser noise replaces the robot file's.
         let mut robot = study.robot.clone();
-        robot.laser.sigma_m = crate::config::values::NonNegative(study.noise.laser_sigma_m);
+        robot.laser.sigma_m = crate::config::values::Sigma(study.noise.laser_sigma_m);
         let makers = study
             .outlier_rates
             .iter()
@@ -316,12 +327,12 @@ impl<'a> Trials<'a> {
         let maker = &self.makers[rate_index.min(self.makers.len() - 1)];
         let mut rng: SimRng = rng::substream(self.stream, index);
         let seed: u64 = rng.random();
-        let start = maker.free_pose(study.clearance_m, &mut rng);
-        let motion = draw_motion(study, &mut rng);
         let fail = |message: String| StudyError::Trial {
             trial: index,
             message,
         };
+        let start = maker.free_pose(study.clearance_m, &mut rng).map_err(fail)?;
+        let motion = draw_motion(study, &mut rng);
         let (odometry, rest) =
             drive(study, start, motion, seed).map_err(|e| fail(e.to_string()))?;
         let pair = maker.pair(start, rest, &mut rng);
@@ -459,16 +470,16 @@ pub fn run_study(
     claim(dir, study, options.shard)?;
     let mut log = Log::open(&progress_dir, study)?;
     let done = log.done.clone();
-    let owned: Vec<u64> = (0..study.total_trials())
-        .filter(|&i| options.shard.owns(i))
-        .collect();
-    let missing: Vec<u64> = owned
-        .iter()
-        .copied()
+    let shard = options.shard;
+    let total = study.total_trials();
+    // The shard's trials are never listed: memory follows the trials run, not the study's size.
+    let owned = shard.count_of(total);
+    let resumed = done.iter().filter(|&&i| i < total && shard.owns(i)).count() as u64;
+    let mut missing = shard
+        .trials(total)
         .filter(|i| !done.contains(i))
         .take(options.max_trials.map_or(usize::MAX, |m| m as usize))
-        .collect();
-    let resumed = owned.len() as u64 - owned.iter().filter(|i| !done.contains(i)).count() as u64;
+        .peekable();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(options.threads)
         .build()
@@ -477,27 +488,29 @@ pub fn run_study(
     let chunk = CHUNK_PER_THREAD * pool.current_num_threads();
     let started = Instant::now();
     let mut finished = resumed;
-    progress(finished, owned.len() as u64);
-    for indices in missing.chunks(chunk) {
+    let mut ran = 0;
+    progress(finished, owned);
+    while missing.peek().is_some() {
+        let indices: Vec<u64> = missing.by_ref().take(chunk).collect();
         let results: Vec<Result<Trial, StudyError>> =
             pool.install(|| indices.par_iter().map(|&i| trials.run(i)).collect());
         let results: Vec<Trial> = results.into_iter().collect::<Result<_, _>>()?;
         log.append(&results)?;
         finished += results.len() as u64;
-        progress(finished, owned.len() as u64);
+        ran += results.len() as u64;
+        progress(finished, owned);
     }
     let wall_seconds = started.elapsed().as_secs_f64();
-    let ran = missing.len() as u64;
     let mut report = RunReport {
-        owned: owned.len() as u64,
+        owned,
         resumed,
         ran,
         wall_seconds,
         summary: None,
         files: Vec::new(),
     };
-    if finished == owned.len() as u64 {
-        let (summary, files) = finish(study, dir, &progress_dir, &owned)?;
+    if finished == owned {
+        let (summary, files) = finish(study, dir, &progress_dir, shard)?;
         report.summary = Some(summary);
         report.files = files;
     }
@@ -549,11 +562,22 @@ impl Log {
         let timings_path = dir.join("timings.log");
         let rows = read_lines(&trials_path)?;
         let mut by_trial: BTreeMap<u64, Vec<String>> = BTreeMap::new();
+        // A row whose checksum does not match was changed after it was written: its trial
+        // runs again, like a torn one.
+        let mut broken = BTreeSet::new();
         for line in rows {
-            if let Some(index) = complete_row(&line, study) {
-                by_trial.entry(index).or_default().push(line);
+            match verified(&line) {
+                Some(row) => {
+                    if let Some(index) = complete_row(row, study) {
+                        by_trial.entry(index).or_default().push(line);
+                    }
+                }
+                None => {
+                    broken.insert(trial_of(&line));
+                }
             }
         }
+        by_trial.retain(|index, _| !broken.contains(index));
         let names: Vec<String> = study.matchers.iter().map(ToString::to_string).collect();
         by_trial.retain(|_, lines| {
             lines.len() == names.len()
@@ -565,7 +589,8 @@ impl Log {
         let done: BTreeSet<u64> = by_trial.keys().copied().collect();
         let mut timings: BTreeMap<(u64, String), String> = BTreeMap::new();
         for line in read_lines(&timings_path)? {
-            let fields: Vec<&str> = line.split(',').collect();
+            let Some(row) = verified(&line) else { continue };
+            let fields: Vec<&str> = row.split(',').collect();
             if let [trial, matcher, micros] = fields[..]
                 && let Ok(trial) = trial.parse::<u64>()
                 && micros.parse::<f64>().is_ok()
@@ -601,8 +626,8 @@ impl Log {
     /// Appends finished trials: timings first, so a trial's rows are never on record without
     /// them; each file flushed to disk.
     fn append(&mut self, trials: &[Trial]) -> Result<(), StudyError> {
-        let timings: String = trials.iter().map(Trial::timing_rows).collect();
-        let rows: String = trials.iter().map(Trial::rows).collect();
+        let timings: String = trials.iter().map(|t| sealed(&t.timing_rows())).collect();
+        let rows: String = trials.iter().map(|t| sealed(&t.rows())).collect();
         self.timings
             .write_all(timings.as_bytes())
             .and_then(|()| self.timings.sync_data())
@@ -614,6 +639,26 @@ impl Log {
         self.done.extend(trials.iter().map(|t| t.index));
         Ok(())
     }
+}
+
+/// Each line of `rows` with its checksum appended: `row;checksum` (16 hex digits).
+fn sealed(rows: &str) -> String {
+    rows.lines()
+        .map(|row| format!("{row};{:016x}\n", checksum(row)))
+        .collect()
+}
+
+/// The row of a sealed log line, if its checksum matches.
+fn verified(line: &str) -> Option<&str> {
+    let (row, sum) = line.rsplit_once(';')?;
+    (u64::from_str_radix(sum, 16).ok()? == checksum(row) && sum.len() == 16).then_some(row)
+}
+
+/// FNV-1a, 64 bits: enough to catch a changed or garbled row.
+fn checksum(row: &str) -> u64 {
+    row.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
 }
 
 /// The lines of a file (none if it does not exist); a last line without its newline is torn.
@@ -666,20 +711,26 @@ fn finish(
     study: &Study,
     dir: &Path,
     progress_dir: &Path,
-    owned: &[u64],
+    shard: Shard,
 ) -> Result<(Summary, Vec<PathBuf>), StudyError> {
-    let owned: BTreeSet<u64> = owned.iter().copied().collect();
+    let owned = |index: u64| index < study.total_trials() && shard.owns(index);
     let mut rows: BTreeMap<u64, Vec<String>> = BTreeMap::new();
     for line in read_lines(&progress_dir.join("trials.log"))? {
-        let index = trial_of(&line);
-        if owned.contains(&index) {
-            rows.entry(index).or_default().push(line);
+        let Some(line) = verified(&line) else {
+            continue;
+        };
+        let index = trial_of(line);
+        if owned(index) {
+            rows.entry(index).or_default().push(line.to_string());
         }
     }
     let mut timings: BTreeMap<u64, Vec<String>> = BTreeMap::new();
     for line in read_lines(&progress_dir.join("timings.log"))? {
-        let index = trial_of(&line);
-        timings.entry(index).or_default().push(line);
+        let Some(line) = verified(&line) else {
+            continue;
+        };
+        let index = trial_of(line);
+        timings.entry(index).or_default().push(line.to_string());
     }
     write_results(study, dir, rows, timings)
 }
@@ -870,10 +921,10 @@ pub fn main(args: MontecarloArgs) -> Result<(), super::CommandError> {
     if let Some(MontecarloCommand::Merge { dirs, out, quiet }) = args.merge {
         let (summary, files) = merge(&dirs, &out)?;
         if !quiet {
-            print!("{}", summary.table());
-            println!("merged {} shard folders into {}", dirs.len(), out.display());
+            say!("{}", summary.table().trim_end_matches('\n'));
+            say!("merged {} shard folders into {}", dirs.len(), out.display());
             for f in &files {
-                println!("  {}", f.display());
+                say!("  {}", f.display());
             }
         }
         return Ok(());
@@ -903,14 +954,14 @@ pub fn main(args: MontecarloArgs) -> Result<(), super::CommandError> {
         return Ok(());
     }
     if report.resumed > 0 {
-        println!(
+        say!(
             "resumed: {} trials were already done in {}",
             report.resumed,
             dir.display()
         );
     }
     let rate = report.ran as f64 / report.wall_seconds.max(1e-9);
-    println!(
+    say!(
         "{} trials run in {:.1} s ({rate:.0} trials/s, {} matchers each)",
         report.ran,
         report.wall_seconds,
@@ -918,13 +969,13 @@ pub fn main(args: MontecarloArgs) -> Result<(), super::CommandError> {
     );
     match &report.summary {
         Some(summary) => {
-            print!("{}", summary.table());
-            println!("wrote {}", dir.display());
+            say!("{}", summary.table().trim_end_matches('\n'));
+            say!("wrote {}", dir.display());
             for f in &report.files {
-                println!("  {}", f.display());
+                say!("  {}", f.display());
             }
         }
-        None => println!(
+        None => say!(
             "{} of {} trials of shard {} done; run the same command again to go on",
             report.resumed + report.ran,
             report.owned,

@@ -10,6 +10,8 @@ use rand::RngExt;
 use robot::localization::RangeScan;
 use robot::{Pose2, Stamp};
 
+/// Random draws for a start pose before a study is declared impossible.
+pub const MAX_DRAWS: u32 = 100_000;
 /// Two scans and the truth between them.
 #[derive(Clone, Debug)]
 pub struct ScanPair {
@@ -73,18 +75,22 @@ impl PairMaker {
             .all(|&dir| self.map.cast_level(point, 0.3, dir, 100.0).is_some())
     }
 
-    /// A random base pose at least `clearance` metres from every wall, any heading.
-    pub fn free_pose(&self, clearance: f64, rng: &mut SimRng) -> Pose2 {
+    /// A random base pose inside the building at least `clearance` metres from every wall, any
+    /// heading; an error after [`MAX_DRAWS`] draws without one (no place is that clear).
+    pub fn free_pose(&self, clearance: f64, rng: &mut SimRng) -> Result<Pose2, String> {
         let ([x0, y0], [x1, y1]) = self.bounds;
-        loop {
+        for _ in 0..MAX_DRAWS {
             let p = Pose2::new(
                 x0 + (x1 - x0) * rng.random::<f64>(),
                 y0 + (y1 - y0) * rng.random::<f64>(),
                 (rng.random::<f64>() * 2.0 - 1.0) * std::f64::consts::PI,
             );
             if self.map.clearance([p.x, p.y]) > clearance && self.enclosed([p.x, p.y]) {
-                return p;
+                return Ok(p);
             }
         }
+        Err(format!(
+            "no start pose inside the building {clearance} m from every wall in {MAX_DRAWS} random draws: lower the study's clearance_m"
+        ))
     }
 }

@@ -114,6 +114,15 @@ impl<F: MainLoop> Board<F> {
         self.inbox.push_back((arrival, line));
     }
 
+    /// Forgets the serial link's traffic (its client has gone): lines the main loop has not
+    /// read yet, and bytes not yet taken by the host. Returns the bytes of output dropped.
+    pub fn forget_link(&mut self) -> usize {
+        self.inbox.clear();
+        let dropped = self.outbox.len();
+        self.outbox.clear();
+        dropped
+    }
+
     /// The next byte sent to the host, with the time it arrives there.
     pub fn pop_output(&mut self) -> Option<(Stamp, u8)> {
         self.outbox.pop_front()

@@ -269,7 +269,7 @@ impl LaserModel {
 /// An LMS at 0.3 m, 361 beams over 180°, 38400 bps, for tests.
 #[cfg(test)]
 pub(crate) fn lms_description(sigma: f64) -> LaserDescription {
-    use crate::config::values::{Finite, NonNegative, Positive};
+    use crate::config::values::{Finite, Positive, Seconds, Sigma};
     LaserDescription {
         x_m: Finite(0.0),
         y_m: Finite(0.0),
@@ -278,9 +278,9 @@ pub(crate) fn lms_description(sigma: f64) -> LaserDescription {
         beams: 361,
         fov_deg: Positive(180.0),
         range_max_m: Positive(32.0),
-        sigma_m: NonNegative(sigma),
+        sigma_m: Sigma(sigma),
         baud: 38_400,
-        sweep_s: Positive(0.02667),
+        sweep_s: Seconds(0.02667),
         telegram_bytes: 732,
     }
 }
