@@ -25,17 +25,8 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 /// The median of `runs` timings of `f`, after one warm-up.
-fn median_time(runs: usize, mut f: impl FnMut()) -> Duration {
-    f();
-    let mut times: Vec<Duration> = (0..runs)
-        .map(|_| {
-            let t = Instant::now();
-            f();
-            t.elapsed()
-        })
-        .collect();
-    times.sort();
-    times[runs / 2]
+fn median_time(runs: usize, f: impl FnMut()) -> Duration {
+    time_spread(runs, f).0
 }
 
 /// The median and the fastest of `runs` timings of `f`, after one warm-up.

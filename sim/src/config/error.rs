@@ -171,14 +171,17 @@ impl Source {
             .rev()
             .map(str::trim)
             .find(|l| l.starts_with('['));
+        let name = |h: &str| {
+            h.trim_start_matches('[')
+                .split(']')
+                .next()
+                .unwrap_or("")
+                .trim()
+                .to_string()
+        };
         Some(match header {
             Some(h) if h.starts_with("[[") => {
-                let name = h
-                    .trim_start_matches('[')
-                    .split(']')
-                    .next()
-                    .unwrap_or("")
-                    .trim();
+                let name = name(h);
                 let header = format!("[[{name}]]");
                 let index = before[..start]
                     .lines()
@@ -187,15 +190,7 @@ impl Source {
                     .saturating_sub(1);
                 format!("{name}[{index}].{key}")
             }
-            Some(h) => {
-                let name = h
-                    .trim_start_matches('[')
-                    .split(']')
-                    .next()
-                    .unwrap_or("")
-                    .trim();
-                format!("{name}.{key}")
-            }
+            Some(h) => format!("{}.{key}", name(h)),
             None => key.to_string(),
         })
     }

@@ -393,7 +393,7 @@ fn rectangle(
     field: &dyn Fn(&str) -> Option<String>,
 ) -> Result<Rectangle, ConfigError> {
     let [w, h] = *size.get_ref();
-    let size_ok = |v: f64| v >= 1e-3 && v <= MAX_COORDINATE_M;
+    let size_ok = |v: f64| (1e-3..=MAX_COORDINATE_M).contains(&v);
     if !(size_ok(w) && size_ok(h)) {
         return Err(source.error(
             size.span(),
@@ -405,7 +405,8 @@ fn rectangle(
     }
     let c = *center.get_ref();
     check_finite(source, center.span(), &c, field("center"))?;
-    if !(heading_deg.abs() <= 3600.0) {
+    // NaN is not within the range either.
+    if !(-3600.0..=3600.0).contains(&heading_deg) {
         return Err(source.error(
             center.span(),
             field("heading_deg"),
@@ -453,7 +454,8 @@ fn check_finite(
     values: &[f64],
     field: Option<String>,
 ) -> Result<(), ConfigError> {
-    match values.iter().find(|v| !(v.abs() <= MAX_COORDINATE_M)) {
+    let within = |v: &f64| (-MAX_COORDINATE_M..=MAX_COORDINATE_M).contains(v);
+    match values.iter().find(|v| !within(v)) {
         Some(v) => Err(source.error(
             span,
             field,
