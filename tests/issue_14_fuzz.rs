@@ -578,3 +578,34 @@ fn a_closed_pipe_ends_quietly_and_an_empty_log_is_refused() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Class 4, the end of `twin serve`: SIGTERM stops it cleanly, with its statistics printed.
+#[test]
+fn twin_serve_prints_its_statistics_when_terminated() {
+    use std::io::{BufRead, BufReader};
+    use std::process::{Command, Stdio};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_twin"))
+        .args([
+            "serve",
+            repo().join("scenarios/lab-tour.toml").to_str().unwrap(),
+        ])
+        .args(["--base", "tcp:127.0.0.1:0"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // Wait until it serves (its addresses are printed), then terminate it.
+    let mut out = BufReader::new(child.stdout.take().unwrap());
+    let mut line = String::new();
+    while out.read_line(&mut line).unwrap() > 0 && !line.contains("tcp:") {}
+    let killed = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let mut rest = String::new();
+    std::io::Read::read_to_string(&mut out, &mut rest).unwrap();
+    let status = child.wait().unwrap();
+    assert!(status.success(), "{status:?}: {rest}");
+    assert!(rest.contains("base: 0 connection(s)"), "{rest}");
+}
