@@ -609,3 +609,34 @@ fn twin_serve_prints_its_statistics_when_terminated() {
     assert!(status.success(), "{status:?}: {rest}");
     assert!(rest.contains("base: 0 connection(s)"), "{rest}");
 }
+
+/// Class 6: a `[[check]]` error names the line of the key that is wrong, not the table's.
+#[test]
+fn check_errors_point_at_their_key() {
+    let dir = scratch("check-lines");
+    let base = absolute("scenarios/lab-tour.toml");
+    let lines_before = base.lines().count();
+    for (table, key_line, field) in [
+        (
+            "[[check]]\nnote = \"x\"\nkind = \"colisions\"\nmax = 2\n",
+            3,
+            "kind",
+        ),
+        (
+            "[[check]]\nkind = \"scans\"\nnote = \"x\"\nmax_m = 3\n",
+            4,
+            "max_m",
+        ),
+        ("[[check]]\nkind = \"scans\"\nmin = 5\nmax = 2\n", 3, "min"),
+    ] {
+        let path = dir.join("s.toml");
+        std::fs::write(&path, format!("{base}\n{table}")).unwrap();
+        let err = Scenario::load(&path).unwrap_err();
+        assert_eq!(err.line, Some(lines_before + 1 + key_line), "{err}");
+        assert!(
+            err.field.as_deref().is_some_and(|f| f.ends_with(field)),
+            "{err}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
