@@ -204,6 +204,28 @@ proptest! {
         }
     }
 
+    /// The other two log formats (App. C.1's `.script`, RobotLogger's `.log`), mutated: refused
+    /// naming the file and line, or read.
+    #[test]
+    fn mutated_script_and_robotlogger_logs_are_refused_or_read(m in mutation(), copies in 1usize..6) {
+        let script = "POS 976052857 337284: 0.000000 0.000000 -0.140850\n\
+                      LASER-RANGE 976052857 337530 0 3 180.0: 1070.0 2000.0 1050.0\n\
+                      POS 976055548 522255: -5088.399900 -3582.500000 -214.577450\n";
+        let robotlogger = "odometry:      2011 05 19 22 22 50.728448:0,0,0,-1.96721e-44,0,0,0\n\
+                           laser-scan:    2011 05 19 22 22 50.728448:-4.7457e-08,-1.08569,6.36921e-08,0.935997\n\
+                           laser-geometry: 0.03,0,0,1,1,1\n";
+        for (text, format, file) in [
+            (script, LogFormat::Script, "a.script"),
+            (robotlogger, LogFormat::RobotLogger, "r.log"),
+        ] {
+            let text = mutate(&text.repeat(copies), &m);
+            match parse_log(&text, format, file) {
+                Ok(log) => prop_assert!(log.scans() > 0),
+                Err(e) => prop_assert!(e.to_string().starts_with(file), "{e}"),
+            }
+        }
+    }
+
     /// Any line to `twin match` gets one answer: the match, or an error naming the line.
     #[test]
     fn twin_match_answers_every_line(m in mutation(), number in 1usize..10_000) {
