@@ -128,10 +128,7 @@ impl Mbicp {
         let (r, u) = ([a[0] - p[0], a[1] - p[1]], [b[0] - a[0], b[1] - a[1]]);
         let uu = m(u, u);
         let t = if uu > 0.0 {
-            // Not `clamp`: a NaN (degenerate segment) becomes 0 rather than staying NaN.
-            #[allow(clippy::manual_clamp)]
-            let t = (-m(u, r) / uu).max(0.0).min(1.0);
-            t
+            (-m(u, r) / uu).clamp(0.0, 1.0)
         } else {
             0.0
         };

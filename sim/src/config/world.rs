@@ -217,7 +217,7 @@ impl WorldDescription {
                 ));
             }
             let values: Vec<f64> = points.iter().flatten().copied().collect();
-            check_finite(source, wall.points.span(), &values, field("points"))?;
+            check_coordinates(source, wall.points.span(), &values, field("points"))?;
             walls.push(Wall {
                 material,
                 points: points.clone(),
@@ -404,7 +404,7 @@ fn rectangle(
         ));
     }
     let c = *center.get_ref();
-    check_finite(source, center.span(), &c, field("center"))?;
+    check_coordinates(source, center.span(), &c, field("center"))?;
     // NaN is not within the range either.
     if !(-3600.0..=3600.0).contains(&heading_deg) {
         return Err(source.error(
@@ -448,7 +448,7 @@ pub const START_MARGIN_M: f64 = 20.0;
 /// The highest ceiling, metres.
 pub const MAX_HEIGHT_M: f64 = 1e3;
 
-fn check_finite(
+fn check_coordinates(
     source: &Source,
     span: std::ops::Range<usize>,
     values: &[f64],
