@@ -7,7 +7,7 @@
 //! gives the same bytes; and the real backend's path (`twin serve` + `SerialRobot`) gives the
 //! same scene.
 
-mod common;
+use crate::common;
 
 use robot::control::Step;
 use sim::commands::reconstruct::{read_run_folder, reconstruct};

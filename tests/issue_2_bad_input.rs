@@ -2,9 +2,7 @@
 //! worlds and scenarios, a robot that does not fit its start, out-of-range commands, and the
 //! `twin` binary's report of all of these.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use robot::hardware::{DriveBase, DriveCommand, ErrorKind, HardwareError, Ramp};
 use sim::config::{NoiseSettings, Scenario, WorldDescription};
 use std::path::{Path, PathBuf};
@@ -97,7 +95,7 @@ fn a_scenario_with_an_out_of_range_command_says_what_was_expected() {
     let err = Scenario::load(dir.join("s.toml")).unwrap_err();
     assert!(
         err.message
-            .contains("Pf = 120 is out of range: expected 0..=90"),
+            .contains("argument 2 (Pf) is \"120\": expected a whole number 0..=90"),
         "{err}"
     );
 }

@@ -1,9 +1,7 @@
 //! Driving into a wall: rapier stops the base at the wall, whatever the speed, while the wheels
 //! keep turning and the odometry believes the whole move happened.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use robot::Pose2;
 use robot::hardware::{DriveBase, DriveWait, Ramp};
 use robot::odometry::Odometer;

@@ -1,9 +1,7 @@
 //! The twin behind the hardware contract: exchanges take the time the 9600 bps line takes, the
 //! firmware's wait waits, and the batteries read like the firmware's `t`.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use robot::hardware::{Batteries, DriveBase, DriveWait};
 use sim::config::NoiseSettings;
 

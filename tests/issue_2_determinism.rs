@@ -1,9 +1,7 @@
 //! The same scenario and seed give bit-identical trajectories and scans; another seed does not.
 //! A failure names the file and the first line that differs.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use sim::commands::run::{RunOptions, run_scenario};
 use sim::output::write_all;
 use std::path::{Path, PathBuf};

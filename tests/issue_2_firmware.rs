@@ -2,9 +2,7 @@
 //! acceleration ramp, turns in place, and the behaviours of the code that a controller must
 //! know about (the `v` ramp-down, the main loop stalled by status replies).
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use robot::geometry::wrap_angle;
 use robot::hardware::{DriveBase, DriveWait, Laser, Ramp};
 use sim::config::NoiseSettings;

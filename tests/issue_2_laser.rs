@@ -1,9 +1,9 @@
 //! The first laser model through the hardware contract: ranges against hand-computed distances,
 //! the no-return value, noise, and timing set by the serial line.
 
-mod common;
+use crate::common;
 
-use common::*;
+use crate::common::*;
 use robot::hardware::{Laser, LaserScan};
 use sim::config::NoiseSettings;
 use std::time::Duration;

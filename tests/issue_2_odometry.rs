@@ -6,9 +6,7 @@
 //! counting when the motors switch off). With random slip, odometry drifts, and more with more
 //! slip.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use robot::geometry::wrap_angle;
 use robot::hardware::{DriveBase, DriveCommand};
 use robot::odometry::{Odometer, integrate_arc};

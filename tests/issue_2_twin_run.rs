@@ -1,9 +1,7 @@
 //! `twin run`: the README's main job writes trajectories in TUM format, scans as JSON Lines, a
 //! summary and a map; every shipped scenario runs to its end without hitting a wall.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use sim::commands::run::{RunOptions, run_scenario};
 use sim::output::ScanLine;
 use std::process::Command;

@@ -3,9 +3,9 @@
 //! outliers at the rate configured (checked against the binomial 99.9 % interval); and the
 //! glass-door run, whose picture shows the ghost points behind the glass.
 
-mod common;
+use crate::common;
 
-use common::*;
+use crate::common::*;
 use robot::hardware::{Laser, LaserScan};
 use sim::config::NoiseSettings;
 use sim::config::Outliers;
@@ -215,8 +215,12 @@ fn the_glass_door_run_draws_ghost_points_behind_the_glass() {
     let svg = std::fs::read_to_string(dir.join("map.svg")).unwrap();
     let ghost_path = svg
         .lines()
-        .find(|l| l.contains("<title>ghosts: no surface there</title>"))
+        .find(|l| l.contains(r#"<g data-layer="ghosts">"#))
         .expect("a ghost layer");
+    assert!(
+        svg.contains(r#"<g data-legend="ghosts">"#),
+        "listed in the legend"
+    );
     assert!(
         ghost_path.matches('M').count() > 50,
         "the ghost layer has points"

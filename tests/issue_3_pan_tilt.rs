@@ -2,9 +2,9 @@
 //! status report as the firmware's `l` writes it — and the laser riding on it, tilted onto the
 //! floor where trigonometry says and level seeing exactly what the 2D model sees.
 
-mod common;
+use crate::common;
 
-use common::{big_room, thesis_in, world_from};
+use crate::common::{big_room, thesis_in, world_from};
 use robot::Stamp;
 use robot::hardware::{
     Laser, LaserScan, PanTilt, PanTiltCommand, PanTiltPosition, PanTiltWait, Ramp,

@@ -3,9 +3,9 @@
 //! window, and the ring fires its sequence one transducer at a time with the firmware's timing;
 //! the sonar-ring run writes one full reading and draws it.
 
-mod common;
+use crate::common;
 
-use common::*;
+use crate::common::*;
 use robot::hardware::{
     DriveBase, DriveWait, ErrorKind, HardwareError, SONAR_NO_ECHO, SPEED_OF_SOUND, SonarCommand,
     SonarEchoes, SonarRing, echo_distance_m,

@@ -5,7 +5,7 @@
 //! builder on a twin run and on the real MIT CSAIL log, and the `twin map` / `twin match`
 //! interfaces with their bad-input behaviour.
 
-mod common;
+use crate::common;
 
 use rand::{RngExt, SeedableRng};
 use robot::Pose2;

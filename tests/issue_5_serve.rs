@@ -3,7 +3,7 @@
 //! pseudo-terminal that the real backend opens like a serial port; and `twin drive` drives a
 //! script through `twin serve` end to end, as the README shows.
 
-mod common;
+use crate::common;
 
 use robot::Clock;
 use robot::hardware::{Batteries, DriveBase};

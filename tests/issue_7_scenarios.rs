@@ -1,12 +1,13 @@
-//! Issue 7: every scenario under `scenarios/` is a regression test. Each runs as its own test case
-//! (`scenario_lab_tour`, …), so a failure names the scenario and the check out of bounds; a test
-//! makes sure no scenario file is left without its case. Golden digests pin the deterministic
+//! Issue 7: every scenario under `scenarios/` is a regression test, found by listing the folder
+//! (a new file needs no Rust), run with its own seed and a spread of others (issue 15: a check
+//! holds for any seed); a failure names the scenario, the seed and the check out of bounds.
+//! Golden digests pin the deterministic
 //! outputs (poses and scans) of a few short runs, naming the first scan that differs; and a
 //! deliberately tightened bound in a scratch scenario must fail with a readable report.
 //!
-//! To add a scenario: write `scenarios/NAME.toml` with its `[[check]]`s, add a `scenario!` line
-//! below. To accept a deliberate change of a golden run: `UPDATE_GOLDEN=1 cargo test --test
-//! issue_7_scenarios golden`, and commit `tests/golden/`.
+//! To add a scenario: write `scenarios/NAME.toml` with its `[[check]]`s. To accept a deliberate
+//! change of a golden run: `UPDATE_GOLDEN=1 cargo test --release --test suite golden`, and commit
+//! `tests/golden/`.
 
 use sim::commands::check::evaluate;
 use sim::commands::run::{RunOptions, run_scenario};
@@ -27,65 +28,54 @@ fn run(path: &Path) -> (Scenario, RunRecord) {
     (scenario, record)
 }
 
-/// Runs a scenario file and asserts its checks.
-fn check_scenario(file: &str) {
-    let (scenario, record) = run(&scenarios_dir().join(file));
-    assert!(
-        !scenario.checks.is_empty(),
-        "{file}: a shipped scenario must have at least one [[check]]"
-    );
-    let report = evaluate(&scenario, &record);
-    assert!(
-        report.passed(),
-        "scenario {file} failed its checks:\n{report}"
-    );
+/// Seeds each scenario runs with besides its own: `TWIN_SEEDS=N` runs 1..=N (default 5). A
+/// check is a claim about the scenario, not about one draw: it must hold for every seed.
+fn spread() -> Vec<u64> {
+    let n = std::env::var("TWIN_SEEDS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(5u64);
+    (1..=n).collect()
 }
 
-macro_rules! scenarios {
-    ($($test:ident => $file:literal,)*) => {
-        $(
-            #[test]
-            fn $test() {
-                check_scenario($file);
-            }
-        )*
-        /// The files with a test case.
-        const LISTED: &[&str] = &[$($file),*];
-    };
-}
-
-scenarios! {
-    scenario_black_door_corridor => "black-door-corridor.toml",
-    scenario_glass_door => "glass-door.toml",
-    scenario_l_corridor => "l-corridor.toml",
-    scenario_lab_tour => "lab-tour.toml",
-    scenario_lab_tour_210 => "lab-tour-210.toml",
-    scenario_lab_tour_210_ls => "lab-tour-210-ls.toml",
-    scenario_lab_tour_thesis => "lab-tour-thesis.toml",
-    scenario_orthogonal_doors => "orthogonal-doors.toml",
-    scenario_pan_tilt_sweep => "pan-tilt-sweep.toml",
-    scenario_scene_lab => "scene-lab.toml",
-    scenario_sonar_ring => "sonar-ring.toml",
-    scenario_sonar_wall_approach => "sonar-wall-approach.toml",
-    scenario_survey_lab => "survey-lab.toml",
-    scenario_tilted_scan => "tilted-scan.toml",
-    scenario_wall_collision => "wall-collision.toml",
-}
-
+/// Every scenario file under `scenarios/` — found, not listed: a new file is a new case — runs
+/// with its own seed and a spread of others, and every check holds for each.
 #[test]
-fn every_scenario_file_has_a_test_case() {
-    let mut files: Vec<String> = std::fs::read_dir(scenarios_dir())
-        .unwrap()
-        .filter_map(|e| e.ok())
-        .map(|e| e.file_name().to_string_lossy().into_owned())
-        .filter(|n| n.ends_with(".toml"))
+fn every_scenario_passes_its_checks_for_every_seed_of_a_spread() {
+    use rayon::prelude::*;
+    let files = sim::commands::check::scenario_files(&scenarios_dir()).unwrap();
+    assert!(
+        files.len() >= 15,
+        "the shipped scenarios are found: {files:?}"
+    );
+    let seeds: Vec<Option<u64>> = std::iter::once(None)
+        .chain(spread().into_iter().map(Some))
         .collect();
-    files.sort();
-    let mut listed: Vec<String> = LISTED.iter().map(|s| s.to_string()).collect();
-    listed.sort();
-    assert_eq!(
-        files, listed,
-        "scenarios/ and the scenario! list in tests/issue_7_scenarios.rs differ: add a line per new scenario"
+    let runs: Vec<(&PathBuf, Option<u64>)> = files
+        .iter()
+        .flat_map(|f| seeds.iter().map(move |&s| (f, s)))
+        .collect();
+    let failures: Vec<String> = runs
+        .par_iter()
+        .filter_map(|&(file, seed)| {
+            let seed_text = seed.map_or("its own seed".to_string(), |s| format!("--seed {s}"));
+            match sim::commands::check::check_file(file, seed) {
+                Ok((report, _)) if report.outcomes.is_empty() => Some(format!(
+                    "{}: a shipped scenario must have at least one [[check]]",
+                    file.display()
+                )),
+                Ok((report, _)) if report.passed() => None,
+                Ok((report, _)) => Some(format!("{} with {seed_text}:\n{report}", file.display())),
+                Err(e) => Some(format!("{} with {seed_text}: {e}", file.display())),
+            }
+        })
+        .collect();
+    assert!(
+        failures.is_empty(),
+        "{} of {} runs failed their checks:\n{}",
+        failures.len(),
+        runs.len(),
+        failures.join("\n")
     );
 }
 
@@ -165,7 +155,7 @@ fn golden(file: &str) {
     }
     let expected = std::fs::read_to_string(&path).unwrap_or_else(|e| {
         panic!(
-            "{}: {e}; create it with UPDATE_GOLDEN=1 cargo test --test issue_7_scenarios golden",
+            "{}: {e}; create it with UPDATE_GOLDEN=1 cargo test --release --test suite golden",
             path.display()
         )
     });
@@ -174,7 +164,7 @@ fn golden(file: &str) {
             panic!(
                 "{}: scan {} differs first from the golden run\n  golden: {e}\n  now:    {g}\n\
                  (fields: scan t truth_x truth_y truth_theta odo_x odo_y odo_theta ranges_fnv1a;\n\
-                 if the change is deliberate, UPDATE_GOLDEN=1 cargo test --test issue_7_scenarios golden)",
+                 if the change is deliberate, UPDATE_GOLDEN=1 cargo test --release --test suite golden)",
                 scenario.name,
                 k - 1
             );

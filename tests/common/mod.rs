@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests: the repository's data files and small worlds.
 #![allow(dead_code)]
 
+pub mod svg;
+
 use sim::config::{NoiseSettings, RobotDescription, Scenario, WorldDescription};
 use sim::{SimRobot, Twin};
 use std::path::PathBuf;

@@ -24,6 +24,18 @@ pub struct MapConfig {
     pub min_correspondences: usize,
     /// Odometry samples kept waiting for scans. Default 4096.
     pub odometry_capacity: usize,
+    /// A match that moves the pose further from the odometry's guess than odometry can err is
+    /// not trusted either (a corridor's walls slid along, a mirror image matched): the bound is
+    /// this many metres plus [`correction_share`](Self::correction_share) of the distance moved
+    /// since the reference. Default 0.5. (Real logs need room: odometry that stalls for a few
+    /// scans while the robot turns is corrected by 10–16° a scan in the MIT CSAIL log.)
+    pub max_correction_m: f64,
+    /// … or turns it further than this many radians per metre moved (one metre at least) plus
+    /// that share of the angle turned. Default 45°: a match that turns the robot round (a
+    /// corridor matched back to front) is refused.
+    pub max_correction_rad: f64,
+    /// The share of a motion odometry may get wrong. Default 0.5.
+    pub correction_share: f64,
 }
 
 impl Default for MapConfig {
@@ -34,6 +46,9 @@ impl Default for MapConfig {
             keyframe_angle_rad: 0.0,
             min_correspondences: 20,
             odometry_capacity: 4096,
+            max_correction_m: 0.5,
+            max_correction_rad: 45f64.to_radians(),
+            correction_share: 0.5,
         }
     }
 }
@@ -50,7 +65,8 @@ pub struct Placed {
     pub odometry: Pose2,
     /// The match against the reference (`None` for the first scan).
     pub matched: Option<MatchResult>,
-    /// Whether the match was used (enough correspondences) rather than the odometry guess.
+    /// Whether the match was used (enough correspondences, a correction within the bounds)
+    /// rather than the odometry guess.
     pub trusted: bool,
 }
 
@@ -203,6 +219,17 @@ impl MapBuilder {
         &self.map
     }
 
+    /// Whether a match `found` (laser frame) departs from the odometry's `guess` by no more than
+    /// odometry can err over `motion` (the base's motion since the reference).
+    fn plausible_correction(&self, motion: &Pose2, guess: &Pose2, found: &Pose2) -> bool {
+        let c = &self.config;
+        let moved = motion.x.hypot(motion.y);
+        let correction = guess.relative(found);
+        correction.x.hypot(correction.y) <= c.max_correction_m + c.correction_share * moved
+            && correction.theta.abs()
+                <= c.max_correction_rad * moved.max(1.0) + c.correction_share * motion.theta.abs()
+    }
+
     fn place_ready(&mut self, all: bool) {
         while let Some(&(stamp, _, _)) = self.pending.front() {
             let odometry = match self.odometry.at(stamp) {
@@ -230,7 +257,8 @@ impl MapBuilder {
                 let trusted = result.correspondences >= self.config.min_correspondences
                     && result.pose.x.is_finite()
                     && result.pose.y.is_finite()
-                    && result.pose.theta.is_finite();
+                    && result.pose.theta.is_finite()
+                    && self.plausible_correction(&base_guess, &laser_guess, &result.pose);
                 let laser = if trusted { result.pose } else { laser_guess };
                 let base = key.mount.compose(&laser).compose(&mount.inverse());
                 (key.estimate.compose(&base), Some(result), trusted)

@@ -7,6 +7,7 @@
 
 use crate::hardware::{
     ArgumentError, BatteryVoltages, DriveCommand, DriveStatus, DriveWait, Ramp, SonarCommand,
+    WHEEL_SPEED_LIMIT,
 };
 use crate::time::Stamp;
 
@@ -51,15 +52,23 @@ pub enum CommandTextError {
     /// The letter is not a drive command.
     #[error("unknown drive command letter `{0}`: expected one of a r i d v p k z w")]
     UnknownLetter(char),
-    /// An argument is not a number in 0..=65535.
-    #[error("`{command}` argument {index} is {text:?}: expected a whole number 0..=65535")]
+    /// An argument is not a whole number in the range that argument takes.
+    #[error(
+        "`{command}` argument {index} ({field}) is {text:?}: expected a whole number {min}..={max}"
+    )]
     BadNumber {
         /// The command letter.
         command: char,
         /// Which argument (1-based).
         index: usize,
+        /// The argument's name in App. A.
+        field: &'static str,
         /// The text found.
         text: String,
+        /// The smallest value the argument takes, as written on the line.
+        min: i64,
+        /// The largest.
+        max: i64,
     },
     /// Wrong number of arguments.
     #[error("`{command}` takes {expected}, got {got} argument(s)")]
@@ -276,6 +285,27 @@ pub fn parse_battery(line: &str, stamp: Stamp) -> Result<BatteryVoltages, ReplyE
     })
 }
 
+/// The name and range of a drive command's argument `index` (1-based) as written on the line
+/// (App. A): the ramp's speeds and the wheel speeds (offset +100 on the wire) are bounded by the
+/// firmware's speed limit, flags are 0 or 1, everything else is a 16-bit count.
+fn argument_range(letter: char, index: usize) -> (&'static str, i64, i64) {
+    let limit = i64::from(WHEEL_SPEED_LIMIT);
+    let count = i64::from(u16::MAX);
+    match (letter, index) {
+        ('k', 1) => ("Pi", 0, limit),
+        ('k', 2) => ("Pf", 0, limit),
+        ('k', _) => ("period ms", 0, count),
+        ('v', 1) => ("left + 100", 100 - limit, 100 + limit),
+        ('v', _) => ("right + 100", 100 - limit, 100 + limit),
+        ('z', _) => ("F", 0, 1),
+        ('w', 1) => ("ms", 0, count),
+        ('w', 2) => ("Fi", 0, 1),
+        ('w', 3) => ("Fd", 0, 1),
+        ('w', _) => ("Fs", 0, 1),
+        _ => ("c", 0, count),
+    }
+}
+
 /// Parses a command as written in a script or typed at a terminal: `a535`, `k5 30 50`,
 /// `v130 130` (offset +100 as on the wire), `w1000 1 1 0`. A trailing newline is allowed.
 ///
@@ -302,14 +332,35 @@ pub fn parse_command_text(text: &str) -> Result<DriveLine, CommandTextError> {
         rest.split_whitespace()
             .enumerate()
             .map(|(i, t)| {
-                parse_digits(t).ok_or_else(|| CommandTextError::BadNumber {
-                    command: letter,
-                    index: i + 1,
-                    text: t.to_string(),
+                parse_digits(t).ok_or_else(|| {
+                    let (field, min, max) = argument_range(letter, i + 1);
+                    CommandTextError::BadNumber {
+                        command: letter,
+                        index: i + 1,
+                        field,
+                        text: t.to_string(),
+                        min,
+                        max,
+                    }
                 })
             })
             .collect::<Result<_, _>>()?
     };
+    // Each argument against its own range, in the form it was written (a wheel speed with its
+    // +100 offset), so the message speaks of what the user typed.
+    for (i, &v) in args.iter().enumerate() {
+        let (field, min, max) = argument_range(letter, i + 1);
+        if !(min..=max).contains(&i64::from(v)) {
+            return Err(CommandTextError::BadNumber {
+                command: letter,
+                index: i + 1,
+                field,
+                text: v.to_string(),
+                min,
+                max,
+            });
+        }
+    }
     let arity = |expected: &'static str, ok: bool| {
         if ok {
             Ok(())
@@ -449,10 +500,13 @@ mod tests {
         let err = parse_command_text("v300 100").unwrap_err();
         assert_eq!(
             err.to_string(),
-            "`v` argument left = 200 is out of range: expected -90..=90"
+            "`v` argument 1 (left + 100) is \"300\": expected a whole number 10..=190"
         );
         let err = parse_command_text("a 5x").unwrap_err();
-        assert!(err.to_string().contains("argument 1 is \"5x\""), "{err}");
+        assert!(
+            err.to_string().contains("argument 1 (c) is \"5x\""),
+            "{err}"
+        );
         assert!(matches!(
             parse_command_text("q"),
             Err(CommandTextError::UnknownLetter('q'))

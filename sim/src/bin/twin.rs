@@ -64,6 +64,9 @@ enum Command {
     /// "guess": [x, y, theta]}; output: {"x", "y", "theta", "iterations", "converged",
     /// "correspondences", "micros"}, or {"error": "..."} for a malformed line.
     Match(commands::map::MatchArgs),
+    /// Write a finished run's consecutive level scans as the pairs `twin match` reads (JSON
+    /// Lines on stdout, the guess from odometry): `twin pairs out/lab-tour > pairs.jsonl`.
+    Pairs(commands::map::PairsArgs),
 }
 
 fn main() -> ExitCode {
@@ -76,6 +79,7 @@ fn main() -> ExitCode {
         Command::Montecarlo(args) => commands::montecarlo::main(args),
         Command::Reconstruct(args) => commands::reconstruct::main(args),
         Command::Match(args) => commands::map::match_main(args),
+        Command::Pairs(args) => commands::map::pairs_main(args),
     };
     match outcome {
         Ok(()) => ExitCode::SUCCESS,

@@ -22,6 +22,9 @@ pub struct CheckOutcome {
     pub measured: String,
     /// The bounds, readably.
     pub expected: String,
+    /// What was measured, as numbers in the check's units (the heading part second, in degrees);
+    /// empty when nothing could be measured.
+    pub values: Vec<f64>,
     /// Whether it holds.
     pub passed: bool,
     /// The check's note.
@@ -111,32 +114,40 @@ fn evaluate_one(
 ) -> CheckOutcome {
     let name = format!("check[{i}] {}", check.kind.name());
     let unit = check.kind.unit();
-    let outcome = |measured: String, expected: String, passed: bool| CheckOutcome {
-        name: name.clone(),
-        measured,
-        expected,
-        passed,
-        note: check.note.clone(),
+    let measured_as =
+        |values: Vec<f64>, measured: String, expected: String, passed: bool| CheckOutcome {
+            name: name.clone(),
+            measured,
+            expected,
+            values,
+            passed,
+            note: check.note.clone(),
+        };
+    let outcome = |measured: String, expected: String, passed: bool| {
+        measured_as(Vec::new(), measured, expected, passed)
     };
     // A quantity with an optional heading part.
     let pair = |metres: f64, degrees: Option<f64>| {
         let mut measured = format!("{metres:.4}{unit}");
         let mut expected = Vec::new();
         let mut passed = check.bounds.holds(metres);
+        let mut values = vec![metres];
         if !check.bounds.is_empty() {
             expected.push(format!("{}{unit}", check.bounds));
         }
         if let Some(deg) = degrees {
+            values.push(deg);
             measured.push_str(&format!(", {deg:.3}°"));
             if !check.degrees.is_empty() {
                 expected.push(format!("{}°", check.degrees));
                 passed &= check.degrees.holds(deg);
             }
         }
-        outcome(measured, expected.join(", "), passed)
+        measured_as(values, measured, expected.join(", "), passed)
     };
     let single = |value: f64, shown: String| {
-        outcome(
+        measured_as(
+            vec![value],
             shown,
             format!("{}{unit}", check.bounds),
             check.bounds.holds(value),
@@ -325,12 +336,20 @@ fn evaluate_one(
     }
 }
 
-/// `twin check`: run every scenario of a folder and evaluate its checks; print a table, fail if
-/// any check fails.
+/// `twin check`: run every scenario of a folder (or one file) and evaluate its checks; print a
+/// table, fail if any check fails. With `--seeds N`, run each scenario with seeds 1..=N instead of
+/// its own and print, per check, the distribution of what it measured over the seeds.
 #[derive(Clone, Debug, clap::Args)]
 pub struct CheckArgs {
-    /// The folder (e.g. scenarios/).
-    pub dir: std::path::PathBuf,
+    /// The folder (e.g. scenarios/) or one scenario file.
+    pub path: std::path::PathBuf,
+    /// Run each scenario with N seeds (FIRST..FIRST+N) instead of its own seed, and report each
+    /// check's distribution over them.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=100_000))]
+    pub seeds: Option<u64>,
+    /// The first seed of `--seeds`.
+    #[arg(long, value_name = "SEED", default_value_t = 1, requires = "seeds")]
+    pub first_seed: u64,
     /// Print only the table and failures.
     #[arg(long, short)]
     pub quiet: bool,
@@ -345,16 +364,18 @@ fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
         .unwrap_or_else(|| "(no message)".into())
 }
 
-/// Runs `twin check`.
-pub fn main(args: CheckArgs) -> Result<(), super::CommandError> {
+/// The scenario files a `twin check` path names: the path itself if it is a file, else the
+/// `.toml` files of the folder, sorted.
+pub fn scenario_files(
+    path: &std::path::Path,
+) -> Result<Vec<std::path::PathBuf>, super::CommandError> {
     use super::CommandError;
-    use super::run::{RunOptions, run_scenario};
-    use rayon::prelude::*;
-    use std::path::PathBuf;
-    let dir = args.dir;
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+    if path.is_file() {
+        return Ok(vec![path.to_path_buf()]);
+    }
+    let mut files: Vec<std::path::PathBuf> = std::fs::read_dir(path)
         .map_err(|source| CommandError::Folder {
-            dir: dir.clone(),
+            dir: path.to_path_buf(),
             source,
         })?
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -362,46 +383,92 @@ pub fn main(args: CheckArgs) -> Result<(), super::CommandError> {
         .collect();
     files.sort();
     if files.is_empty() {
-        return Err(CommandError::NoScenarios(dir));
+        return Err(CommandError::NoScenarios(path.to_path_buf()));
     }
+    Ok(files)
+}
+
+/// One scenario run with its check report and wall seconds, or why it could not run (a load
+/// error, a failed run, a crash: each is one failed row, not the end of the table).
+pub fn check_file(path: &std::path::Path, seed: Option<u64>) -> Result<(CheckReport, f64), String> {
+    use super::run::{RunOptions, run_scenario};
+    let started = std::time::Instant::now();
+    let check = || {
+        Scenario::load(path)
+            .map_err(|e| e.to_string())
+            .and_then(|scenario| {
+                let options = RunOptions {
+                    seed,
+                    ..RunOptions::default()
+                };
+                let record =
+                    run_scenario(&scenario, &options, |_, _| {}).map_err(|e| e.to_string())?;
+                Ok((
+                    evaluate(&scenario, &record),
+                    started.elapsed().as_secs_f64(),
+                ))
+            })
+    };
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(check))
+        .unwrap_or_else(|panic| Err(format!("the run crashed: {}", panic_message(&*panic))))
+}
+
+/// The name a report gives a scenario file.
+fn stem(path: &std::path::Path) -> String {
+    path.file_stem()
+        .map_or("?".into(), |s| s.to_string_lossy().into_owned())
+}
+
+/// Runs `twin check`.
+pub fn main(args: CheckArgs) -> Result<(), super::CommandError> {
+    use rayon::prelude::*;
+    let files = scenario_files(&args.path)?;
+    let seeds: Vec<Option<u64>> = match args.seeds {
+        None => vec![None],
+        Some(n) => (0..n)
+            .map(|k| Some(args.first_seed.wrapping_add(k)))
+            .collect(),
+    };
+    let runs: Vec<(usize, Option<u64>)> = (0..files.len())
+        .flat_map(|f| seeds.iter().map(move |&s| (f, s)))
+        .collect();
     let bar = super::bar(
         args.quiet,
-        files.len() as u64,
-        "check [{bar:30}] {pos}/{len} scenarios {elapsed_precise}",
+        runs.len() as u64,
+        "check [{bar:30}] {pos}/{len} runs {elapsed_precise} (ETA {eta})",
     );
-    // Per file: its check report and wall seconds, or why it could not run.
-    type Outcome = Result<(CheckReport, f64), String>;
-    let results: Vec<(PathBuf, Outcome)> = files
+    let results: Vec<(usize, Option<u64>, Result<(CheckReport, f64), String>)> = runs
         .par_iter()
-        .map(|path| {
-            let started = std::time::Instant::now();
-            let check = || {
-                Scenario::load(path)
-                    .map_err(|e| e.to_string())
-                    .and_then(|scenario| {
-                        let record = run_scenario(&scenario, &RunOptions::default(), |_, _| {})
-                            .map_err(|e| e.to_string())?;
-                        Ok((
-                            evaluate(&scenario, &record),
-                            started.elapsed().as_secs_f64(),
-                        ))
-                    })
-            };
-            // One scenario that crashes is one failed row, not the end of the table.
-            let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(check))
-                .unwrap_or_else(|panic| {
-                    Err(format!("the run crashed: {}", panic_message(&*panic)))
-                });
+        .map(|&(f, seed)| {
+            let outcome = check_file(&files[f], seed);
             bar.inc(1);
-            (path.clone(), outcome)
+            (f, seed, outcome)
         })
         .collect();
     bar.finish_and_clear();
+    let failed = if args.seeds.is_some() {
+        print_spread(&files, &seeds, &results)
+    } else {
+        print_table(&files, &results)
+    };
+    if failed > 0 {
+        return Err(super::CommandError::ScenariosFailed {
+            failed,
+            total: results.len(),
+        });
+    }
+    Ok(())
+}
+
+type Results = [(usize, Option<u64>, Result<(CheckReport, f64), String>)];
+
+/// The table of a plain `twin check`; returns the number of scenarios that failed.
+fn print_table(files: &[std::path::PathBuf], results: &Results) -> usize {
     say!("| scenario | checks | passed | failed | seconds |");
     say!("|---|---|---|---|---|");
     let mut failed = 0;
-    for (path, result) in &results {
-        let name = path.file_stem().map_or("?".into(), |s| s.to_string_lossy());
+    for (f, _, result) in results {
+        let name = stem(&files[*f]);
         match result {
             Ok((report, seconds)) => {
                 let bad = report.failures().count();
@@ -418,21 +485,121 @@ pub fn main(args: CheckArgs) -> Result<(), super::CommandError> {
             }
         }
     }
-    for (path, result) in &results {
+    for (f, _, result) in results {
         match result {
             Ok((report, _)) if !report.passed() => {
                 say!();
                 say!("{}", report.to_string().trim_end_matches('\n'));
             }
-            Err(e) => say!("\n{}: {e}", path.display()),
+            Err(e) => say!("\n{}: {e}", files[*f].display()),
             _ => {}
         }
     }
-    if failed > 0 {
-        return Err(CommandError::ScenariosFailed {
-            failed,
-            total: results.len(),
-        });
+    failed
+}
+
+/// A value of a distribution, readably.
+fn show(x: f64) -> String {
+    if x.is_finite() {
+        let a = x.abs();
+        if a != 0.0 && !(0.001..100_000.0).contains(&a) {
+            format!("{x:.3e}")
+        } else if a >= 100.0 {
+            format!("{x:.0}")
+        } else {
+            format!("{x:.4}")
+        }
+    } else {
+        "none".into()
     }
-    Ok(())
+}
+
+/// The `q` quantile (0..=1) of sorted values, by the nearest rank.
+fn quantile(sorted: &[f64], q: f64) -> f64 {
+    let rank = (q * sorted.len() as f64).ceil() as usize;
+    sorted[rank.clamp(1, sorted.len()) - 1]
+}
+
+/// The seed-spread report of `twin check --seeds`: per scenario, per check and quantity, the
+/// distribution over the seeds and how many seeds passed; then each failing (scenario, seed).
+/// Returns the number of runs that failed.
+fn print_spread(files: &[std::path::PathBuf], seeds: &[Option<u64>], results: &Results) -> usize {
+    let first = seeds.first().copied().flatten().unwrap_or(0);
+    let last = seeds.last().copied().flatten().unwrap_or(0);
+    let mut failed = 0;
+    for (f, path) in files.iter().enumerate() {
+        let runs: Vec<_> = results.iter().filter(|r| r.0 == f).collect();
+        let reports: Vec<&CheckReport> = runs
+            .iter()
+            .filter_map(|r| r.2.as_ref().ok().map(|(report, _)| report))
+            .collect();
+        let bad = runs
+            .iter()
+            .filter(|r| r.2.as_ref().map_or(true, |(report, _)| !report.passed()))
+            .count();
+        failed += bad;
+        say!(
+            "## {} — seeds {first}..={last}: {} of {} runs pass every check",
+            stem(path),
+            runs.len() - bad,
+            runs.len()
+        );
+        say!();
+        let Some(model) = reports.first() else {
+            say!("(no run completed)");
+            say!();
+            continue;
+        };
+        say!("| check | bound | min | median | 95 % | max | seeds passing |");
+        say!("|---|---|---|---|---|---|---|");
+        for (i, outcome) in model.outcomes.iter().enumerate() {
+            let parts = outcome.values.len().max(1);
+            for part in 0..parts {
+                let mut values: Vec<f64> = reports
+                    .iter()
+                    .filter_map(|r| r.outcomes.get(i)?.values.get(part).copied())
+                    .map(|v| if v.is_nan() { f64::INFINITY } else { v })
+                    .collect();
+                values.sort_by(f64::total_cmp);
+                let passing = reports
+                    .iter()
+                    .filter(|r| r.outcomes.get(i).is_some_and(|o| o.passed))
+                    .count();
+                let (name, bound) = if part == 0 {
+                    (outcome.name.clone(), outcome.expected.clone())
+                } else {
+                    (format!("{} (°)", outcome.name), String::from("″"))
+                };
+                if values.is_empty() {
+                    say!(
+                        "| {name} | {bound} | - | - | - | - | {passing}/{} |",
+                        runs.len()
+                    );
+                } else {
+                    say!(
+                        "| {name} | {bound} | {} | {} | {} | {} | {passing}/{} |",
+                        show(values[0]),
+                        show(quantile(&values, 0.5)),
+                        show(quantile(&values, 0.95)),
+                        show(values[values.len() - 1]),
+                        runs.len()
+                    );
+                }
+            }
+        }
+        say!();
+    }
+    for (f, seed, result) in results {
+        let seed = seed.unwrap_or_default();
+        match result {
+            Ok((report, _)) if !report.passed() => {
+                for o in report.failures() {
+                    say!("{} --seed {seed}: {o}", files[*f].display());
+                }
+            }
+            Err(e) => say!("{} --seed {seed}: {e}", files[*f].display()),
+            _ => {}
+        }
+    }
+    failed
 }

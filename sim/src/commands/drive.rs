@@ -364,6 +364,17 @@ pub fn main(args: DriveArgs) -> Result<(), super::CommandError> {
         ));
     }
     let scenario = Scenario::load(&args.script)?;
+    let moves_head = scenario.pan_tilt.is_some() || scenario.steps.iter().any(|s| s.uses_head());
+    if moves_head && args.pan_tilt.is_none() {
+        return Err(CommandError::MissingOption {
+            option: "--pantilt",
+            why: format!(
+                "{} moves the pan-tilt head (its [pan_tilt] table or head, sweep, scene or survey \
+                 steps): give the pan-tilt microcontroller's address, e.g. --pantilt tcp:127.0.0.1:4002",
+                args.script.display()
+            ),
+        });
+    }
     let config = serial_config(&scenario, args.base, args.pan_tilt, Some(args.laser));
     let clock: std::sync::Arc<dyn robot::Clock> =
         std::sync::Arc::new(super::serve::WallClock::new(args.time_scale));

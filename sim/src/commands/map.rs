@@ -383,3 +383,99 @@ pub fn match_main(args: MatchArgs) -> Result<(), super::CommandError> {
     }
     Ok(())
 }
+
+/// One line of a run's `scans.jsonl`, as far as `twin pairs` reads it.
+#[derive(Deserialize)]
+struct RunScan {
+    angle_min: f64,
+    angle_increment: f64,
+    range_max: f64,
+    ranges: Vec<f64>,
+    odometry: [f64; 3],
+    laser_mount: [f64; 3],
+    #[serde(default)]
+    laser_tilt: f64,
+}
+
+/// One output line of `twin pairs` (the input of `twin match`).
+#[derive(Serialize)]
+struct PairLine<'a> {
+    #[serde(rename = "ref")]
+    reference: &'a RangeScan,
+    cur: &'a RangeScan,
+    guess: [f64; 3],
+}
+
+/// `twin pairs`: the scan pairs of a finished run as `twin match` reads them — each level scan
+/// of RUN_DIR/scans.jsonl with the next, the guess from odometry (the current laser pose in the
+/// reference laser's frame).
+#[derive(Clone, Debug, clap::Args)]
+pub struct PairsArgs {
+    /// A run's output folder (`twin run` or `twin drive`), with its scans.jsonl.
+    pub run_dir: PathBuf,
+    /// Write at most this many pairs.
+    #[arg(long)]
+    pub max: Option<usize>,
+}
+
+/// Runs `twin pairs`, writing JSON Lines to stdout.
+pub fn pairs_main(args: PairsArgs) -> Result<(), super::CommandError> {
+    use super::CommandError;
+    use std::io::{BufRead, Write};
+    let path = args.run_dir.join("scans.jsonl");
+    let file = std::fs::File::open(&path).map_err(|source| CommandError::Read {
+        path: path.clone(),
+        source,
+    })?;
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    let io = |what| move |source| CommandError::Io { what, source };
+    let mut previous: Option<(RangeScan, Pose2)> = None;
+    let mut written = 0usize;
+    for (k, line) in std::io::BufReader::new(file).lines().enumerate() {
+        if args.max.is_some_and(|m| written >= m) {
+            break;
+        }
+        let line = line.map_err(io("reading scans.jsonl"))?;
+        if line.trim().is_empty() {
+            continue;
+        }
+        let scan: RunScan = serde_json::from_str(&line).map_err(|e| CommandError::Parse {
+            path: path.clone(),
+            line: k + 1,
+            message: e.to_string(),
+        })?;
+        // Tilted scans do not lie in the plane of the next: leave them out.
+        if scan.laser_tilt.abs() > 1e-9 {
+            previous = None;
+            continue;
+        }
+        let [x, y, theta] = scan.odometry;
+        let [mx, my, mt] = scan.laser_mount;
+        let laser = Pose2::new(x, y, theta).compose(&Pose2::new(mx, my, mt));
+        let range = RangeScan {
+            stamp: robot::Stamp::ZERO,
+            angle_min: scan.angle_min,
+            angle_increment: scan.angle_increment,
+            range_max: scan.range_max,
+            ranges: scan.ranges,
+        };
+        if let Some((reference, at)) = &previous {
+            let g = at.relative(&laser);
+            let pair = PairLine {
+                reference,
+                cur: &range,
+                guess: [g.x, g.y, g.theta],
+            };
+            let text = serde_json::to_string(&pair).map_err(|e| CommandError::Parse {
+                path: path.clone(),
+                line: k + 1,
+                message: e.to_string(),
+            })?;
+            writeln!(out, "{text}").map_err(io("writing stdout"))?;
+            written += 1;
+        }
+        previous = Some((range, laser));
+    }
+    out.flush().map_err(io("writing stdout"))?;
+    Ok(())
+}

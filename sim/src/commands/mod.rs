@@ -66,6 +66,33 @@ pub enum CommandError {
         /// What was given.
         found: String,
     },
+    /// An option the command needs for this input was not given.
+    #[error("{option} is needed: {why}")]
+    MissingOption {
+        /// The option, as typed (`--pantilt`).
+        option: &'static str,
+        /// Why this input needs it.
+        why: String,
+    },
+    /// A file cannot be opened or read.
+    #[error("{}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// What failed.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A line of a file is not what was expected.
+    #[error("{}:{line}: {message}", path.display())]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line.
+        line: usize,
+        /// What is wrong and what was expected.
+        message: String,
+    },
     /// A scenario's run failed on the twin.
     #[error(transparent)]
     Run(#[from] run::RunError),
@@ -160,6 +187,12 @@ pub(crate) fn bar(quiet: bool, len: u64, template: &str) -> ProgressBar {
     ProgressBar::new(len).with_style(
         ProgressStyle::with_template(template)
             .expect("valid template")
+            .with_key(
+                "rate",
+                |state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
+                    let _ = write!(w, "{:.0}/s", state.per_sec());
+                },
+            )
             .progress_chars("=> "),
     )
 }

@@ -79,6 +79,39 @@ impl Study {
         self.trials_per_rate * self.outlier_rates.len() as u64
     }
 
+    /// The same study with `trials` trials per rate (`twin montecarlo --trials`): a smaller
+    /// study of the same design, with its own table. Its text (kept in the output folder, which
+    /// it then owns) says so: `trials_per_rate` is rewritten, or added when the file left it out.
+    /// `trials` is at least 1 (clap's range on `--trials`).
+    pub fn with_trials_per_rate(mut self, trials: u64) -> Self {
+        let trials = trials.max(1);
+        let line = format!("trials_per_rate = {trials}  # twin montecarlo --trials {trials}");
+        let mut replaced = false;
+        let mut text: Vec<String> = self
+            .text
+            .lines()
+            .map(|l| {
+                if !replaced && l.trim_start().starts_with("trials_per_rate") {
+                    replaced = true;
+                    line.clone()
+                } else {
+                    l.to_string()
+                }
+            })
+            .collect();
+        if !replaced {
+            // Top-level keys must come before the first table.
+            let at = text
+                .iter()
+                .position(|l| l.trim_start().starts_with('['))
+                .unwrap_or(text.len());
+            text.insert(at, line);
+        }
+        self.text = text.join("\n") + "\n";
+        self.trials_per_rate = trials;
+        self
+    }
+
     /// Reads a study and the world and robot it names.
     pub fn load(path: impl AsRef<Path>) -> Result<Self, ConfigError> {
         let source = Source::read(path.as_ref())?;

@@ -6,6 +6,7 @@
 //! scenario and the seed: numbers are printed with fixed precision, so two runs give the same
 //! bytes.
 
+pub mod figure;
 pub mod logmap;
 mod ply;
 mod reconstruction;

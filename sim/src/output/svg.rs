@@ -1,6 +1,8 @@
 //! `map.svg`: the world, the true path, the odometry path, and the scans drawn from both, so the
-//! drift shows at a glance.
+//! drift shows at a glance; a grid in metres, a scale bar and a legend of exactly what is drawn.
 
+pub(super) use super::figure::xml_escape;
+use super::figure::{Layers, Plan, Swatch};
 use super::summary::estimate_errors;
 use crate::config::{Material, WorldDescription};
 use crate::record::RunRecord;
@@ -11,17 +13,19 @@ use std::path::Path;
 
 /// Pixels per metre.
 const SCALE: f64 = 60.0;
-/// Margin around the world, metres.
+/// Margin around what the picture frames, metres.
 const MARGIN: f64 = 0.6;
+/// Margin around the plan view, pixels.
+const PAD: f64 = 12.0;
 /// Most scan points drawn per projection (the rest are thinned out evenly).
 const MAX_POINTS: usize = 60_000;
 /// Width of one legend column, pixels.
-const LEGEND_COLUMN: f64 = 280.0;
+const LEGEND_COLUMN: f64 = 300.0;
 /// The colour a point of `kind` is drawn in.
 pub(super) const fn point_colour(kind: PointKind) -> &'static str {
     match kind {
         PointKind::Surface => "#1f3b73",
-        PointKind::Floor => "#2ca25f",
+        PointKind::Floor => "#a6761d",
         PointKind::Ghost => "#e0115f",
     }
 }
@@ -30,31 +34,56 @@ pub(super) const fn point_colour(kind: PointKind) -> &'static str {
 pub(super) fn wall_colour(material: Material) -> &'static str {
     match material {
         Material::Matte => "#c9c9c9",
-        Material::Black => "#8c8c8c",
+        Material::Black => "#3c3c3c",
         Material::Glass => "#8ec9f0",
         Material::Metal => "#b3a6c9",
     }
 }
 
-/// The legend's entries.
-const LEGEND: [(&str, &str); 6] = [
-    ("#1a9850", "true path"),
-    ("#d73027", "odometry"),
-    (
-        point_colour(PointKind::Surface),
-        "scans placed at the true pose",
-    ),
-    ("#f08a24", "scans placed at odometry"),
-    (point_colour(PointKind::Ghost), "ghosts: no surface there"),
-    ("#c9c9c9", "walls (blue glass, violet metal)"),
-];
-/// The legend's entries for the scan-matching estimate, shown when the run localised.
-const ESTIMATE_LEGEND: [(&str, &str); 2] = [
-    ("#6a3d9a", "scan-matching estimate"),
-    ("#b07cd8", "scans placed at the estimate"),
-];
-/// The legend's entry for floor hits, shown when a tilted laser made some.
-const FLOOR_LEGEND: (&str, &str) = (point_colour(PointKind::Floor), "floor hits (tilted laser)");
+/// The legend key and label of a wall of `material`.
+pub(super) fn wall_legend(material: Material) -> (&'static str, &'static str) {
+    match material {
+        Material::Matte => ("wall-matte", "walls"),
+        Material::Black => ("wall-black", "black surfaces (no laser return)"),
+        Material::Glass => ("wall-glass", "glass"),
+        Material::Metal => ("wall-metal", "metal (mirrors the laser)"),
+    }
+}
+
+/// The walls of `world` in `plan`, one layer per material.
+pub(super) fn draw_walls(layers: &mut Layers, plan: &Plan, world: &WorldDescription, width: f64) {
+    for material in [
+        Material::Matte,
+        Material::Black,
+        Material::Glass,
+        Material::Metal,
+    ] {
+        let colour = wall_colour(material);
+        let mut body = String::new();
+        for wall in world.walls.iter().filter(|w| w.material == material) {
+            let d = path_data(
+                wall.points.iter().map(|p| {
+                    let (x, y) = plan.clamped(p[0], p[1]);
+                    (x, y)
+                }),
+                wall.closed,
+            );
+            let _ = write!(
+                body,
+                r#"<path d="{d}" stroke="{colour}" stroke-width="{width}" fill="none" stroke-linejoin="round"/>"#
+            );
+        }
+        let (key, label) = wall_legend(material);
+        layers.add(key, label, Swatch::Line(colour, width, None), &body);
+    }
+}
+
+const TRUTH: &str = "#1a9850";
+const ODOMETRY: &str = "#d73027";
+const DRIFTED: &str = "#f08a24";
+const ESTIMATE: &str = "#6a3d9a";
+const ESTIMATE_SCANS: &str = "#b07cd8";
+const BEYOND: &str = "#7a7a7a";
 
 /// Writes the map picture.
 pub fn write_map_svg(
@@ -65,130 +94,139 @@ pub fn write_map_svg(
     std::fs::write(path, render(record, world))
 }
 
-struct Frame {
-    min: [f64; 2],
-    max: [f64; 2],
-}
-
-impl Frame {
-    fn x(&self, x: f64) -> f64 {
-        (x - self.min[0] + MARGIN) * SCALE
-    }
-    fn y(&self, y: f64) -> f64 {
-        (self.max[1] + MARGIN - y) * SCALE
-    }
-    /// Whether the world point `(x, y)` falls inside the drawing (the world and its margin).
-    fn inside(&self, x: f64, y: f64) -> bool {
-        (self.min[0] - MARGIN..=self.max[0] + MARGIN).contains(&x)
-            && (self.min[1] - MARGIN..=self.max[1] + MARGIN).contains(&y)
-    }
-}
-
 fn render(record: &RunRecord, world: &WorldDescription) -> String {
+    let odometry: Vec<Pose2> =
+        std::iter::once(record.true_path.first().map_or(world.start, |p| p.1))
+            .chain(record.scans.iter().map(|r| r.odometry))
+            .chain(std::iter::once(record.final_odometry))
+            .collect();
+    let estimate: Vec<Pose2> = record
+        .localisation
+        .iter()
+        .flat_map(|l| l.placed.iter().map(|p| p.estimate))
+        .collect();
+    // The frame holds the world and every path, end markers included; scan points beyond it
+    // (mirror images far behind glass, scans placed by a drifted odometry) are marked at its edge.
     let (mut min, mut max) = world.bounds();
-    for (_, p) in &record.true_path {
-        min = [min[0].min(p.x), min[1].min(p.y)];
-        max = [max[0].max(p.x), max[1].max(p.y)];
+    let truth_poses = record.true_path.iter().map(|(_, p)| p);
+    for p in truth_poses.chain(&odometry).chain(&estimate) {
+        if p.x.is_finite() && p.y.is_finite() && p.x.abs() < 1e5 && p.y.abs() < 1e5 {
+            min = [min[0].min(p.x - 0.4), min[1].min(p.y - 0.4)];
+            max = [max[0].max(p.x + 0.4), max[1].max(p.y + 0.4)];
+        }
     }
-    let f = Frame { min, max };
+    let plan = Plan {
+        min: [min[0] - MARGIN, min[1] - MARGIN],
+        max: [max[0] + MARGIN, max[1] + MARGIN],
+        origin: [PAD + Plan::LEFT, PAD + Plan::ABOVE],
+        scale: SCALE,
+    };
     let map = WorldMap::new(world);
     let points = classify_points(record, &map);
-    let mut legend = LEGEND.to_vec();
-    if !points.floor.is_empty() {
-        legend.push(FLOOR_LEGEND);
-    }
-    if record.localisation.is_some() {
-        legend.extend(ESTIMATE_LEGEND);
-    }
-    let width = ((max[0] - min[0] + 2.0 * MARGIN) * SCALE).max(LEGEND_COLUMN + 24.0);
-    let columns = (((width - 24.0) / LEGEND_COLUMN).floor() as usize).clamp(1, 3);
-    let legend_rows = legend.len().div_ceil(columns);
-    let legend_height = 20.0 * legend_rows as f64 + 68.0;
-    let height = (max[1] - min[1] + 2.0 * MARGIN) * SCALE + legend_height;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{height:.0}" viewBox="0 0 {width:.0} {height:.0}" font-family="sans-serif" font-size="13">"#
-    );
-    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
-
-    // Walls.
-    for wall in &world.walls {
-        let colour = wall_colour(wall.material);
-        let w = if wall.material == Material::Black {
-            6.0
-        } else {
-            5.0
-        };
-        let d = path_data(
-            wall.points.iter().map(|p| (f.x(p[0]), f.y(p[1]))),
-            wall.closed,
-        );
-        let _ = writeln!(
-            s,
-            r#"<path d="{d}" stroke="{colour}" stroke-width="{w}" fill="none" stroke-linejoin="round"><title>{}</title></path>"#,
-            wall.material.name()
-        );
-    }
+    let mut layers = Layers::default();
+    layers.plain(&plan.grid());
+    draw_walls(&mut layers, &plan, world, 5.0);
 
     // Scans drawn from the true pose (what is there, with the laser's noise) and from odometry.
     // A point where there is no surface — a mirror image off glass or metal, or an outlier — is
     // a ghost, drawn apart; so are the floor hits of a tilted laser.
-    // Points beyond the drawing (mirror images far behind glass) are counted, not drawn.
-    let beyond = std::cell::Cell::new(0usize);
-    let dots = |points: &mut dyn Iterator<Item = [f64; 3]>| {
+    let mut beyond = String::new();
+    let mut beyond_count = 0usize;
+    let mut dots = |points: &mut dyn Iterator<Item = [f64; 3]>| {
         let mut d = String::new();
         for p in points {
-            if f.inside(p[0], p[1]) {
-                let _ = write!(d, "M{:.1} {:.1}h0", f.x(p[0]), f.y(p[1]));
+            if plan.contains(p[0], p[1]) {
+                let _ = write!(d, "M{:.1} {:.1}h0", plan.x(p[0]), plan.y(p[1]));
             } else {
-                beyond.set(beyond.get() + 1);
+                beyond_count += 1;
+                let (x, y) = plan.clamped(p[0], p[1]);
+                let _ = write!(beyond, "M{x:.1} {y:.1}h0");
             }
         }
-        d
+        if d.is_empty() {
+            d
+        } else {
+            format!(
+                r#"<path d="{d}" stroke="currentColor" stroke-width="2" stroke-linecap="round" fill="none"/>"#
+            )
+        }
     };
-    for (d, colour, label) in [
-        (
-            dots(&mut points.drifted.iter().copied()),
-            "#f08a24",
-            "scans at odometry",
-        ),
-        (
-            dots(&mut points.seen.iter().copied()),
-            point_colour(PointKind::Surface),
-            "scans at true pose",
-        ),
-        (
-            dots(&mut points.floor.iter().copied()),
-            FLOOR_LEGEND.0,
-            FLOOR_LEGEND.1,
-        ),
-        (
-            dots(&mut points.ghosts.iter().copied()),
-            point_colour(PointKind::Ghost),
-            "ghosts: no surface there",
-        ),
-    ] {
-        let _ = writeln!(
-            s,
-            r#"<path d="{d}" stroke="{colour}" stroke-width="2" stroke-linecap="round" fill="none"><title>{label}</title></path>"#
-        );
-    }
-
-    // The scan-matching estimate's map.
-    if let Some(loc) = &record.localisation {
+    let coloured = |colour: &str, body: String| {
+        if body.is_empty() {
+            body
+        } else {
+            format!(r#"<g color="{colour}">{body}</g>"#)
+        }
+    };
+    let drifted = coloured(DRIFTED, dots(&mut points.drifted.iter().copied()));
+    let seen = coloured(
+        point_colour(PointKind::Surface),
+        dots(&mut points.seen.iter().copied()),
+    );
+    let floor = coloured(
+        point_colour(PointKind::Floor),
+        dots(&mut points.floor.iter().copied()),
+    );
+    let ghosts = coloured(
+        point_colour(PointKind::Ghost),
+        dots(&mut points.ghosts.iter().copied()),
+    );
+    let estimated = record.localisation.as_ref().map_or(String::new(), |loc| {
         let stride = loc.map.len().div_ceil(MAX_POINTS).max(1);
-        let d = dots(&mut loc.map.iter().step_by(stride).map(|p| [p[0], p[1], 0.0]));
-        let _ = writeln!(
-            s,
-            r#"<path d="{d}" stroke="{}" stroke-width="2" stroke-linecap="round" fill="none" opacity="0.8"><title>scans placed at the estimate</title></path>"#,
-            ESTIMATE_LEGEND[1].0
+        coloured(
+            ESTIMATE_SCANS,
+            dots(&mut loc.map.iter().step_by(stride).map(|p| [p[0], p[1], 0.0])),
+        )
+    });
+    layers.add(
+        "scans-odometry",
+        "scans placed at odometry",
+        Swatch::Dots(DRIFTED),
+        &drifted,
+    );
+    layers.add(
+        "scans-truth",
+        "scans placed at the true pose",
+        Swatch::Dots(point_colour(PointKind::Surface)),
+        &seen,
+    );
+    layers.add(
+        "floor",
+        "floor hits (tilted laser)",
+        Swatch::Dots(point_colour(PointKind::Floor)),
+        &floor,
+    );
+    layers.add(
+        "ghosts",
+        "ghosts: no surface there",
+        Swatch::Dots(point_colour(PointKind::Ghost)),
+        &ghosts,
+    );
+    layers.add(
+        "scans-estimate",
+        "scans placed at the estimate",
+        Swatch::Dots(ESTIMATE_SCANS),
+        &estimated,
+    );
+    if !beyond.is_empty() {
+        layers.add(
+            "beyond",
+            format!("{beyond_count} point{} beyond the frame, at its edge", if beyond_count == 1 { "" } else { "s" }),
+            Swatch::Dots(BEYOND),
+            &format!(
+                r#"<path d="{beyond}" stroke="{BEYOND}" stroke-width="3" stroke-linecap="square" fill="none"/>"#
+            ),
         );
     }
 
     // The sonar ring's last reading: a wedge per transducer out to its echo.
     if let Some(sonar) = &record.sonar {
-        draw_sonar(&mut s, &f, sonar);
+        layers.add(
+            "sonar",
+            "sonar: last ring reading (dashed: no echo)",
+            Swatch::Area("#9b59b6", "#7d3c98"),
+            &draw_sonar(&plan, sonar),
+        );
     }
 
     // Paths.
@@ -199,82 +237,100 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
         .step_by(step)
         .map(|(_, p)| *p)
         .collect();
-    let odometry: Vec<Pose2> = std::iter::once(world.start)
-        .chain(record.scans.iter().map(|r| r.odometry))
-        .chain(std::iter::once(record.final_odometry))
-        .collect();
-    let estimate: Vec<Pose2> = record
-        .localisation
-        .iter()
-        .flat_map(|l| l.placed.iter().map(|p| p.estimate))
-        .collect();
-    for (poses, colour, dash, label) in [
-        (&truth, "#1a9850", "", "true path"),
+    for (poses, colour, dash, key, label) in [
+        (&truth, TRUTH, None, "path-truth", "true path"),
         (
             &odometry,
-            "#d73027",
-            r#" stroke-dasharray="6 4""#,
+            ODOMETRY,
+            Some("6 4"),
+            "path-odometry",
             "odometry",
         ),
         (
             &estimate,
-            ESTIMATE_LEGEND[0].0,
-            r#" stroke-dasharray="2 3""#,
+            ESTIMATE,
+            Some("2 3"),
+            "path-estimate",
             "scan-matching estimate",
         ),
     ] {
-        let d = path_data(poses.iter().map(|p| (f.x(p.x), f.y(p.y))), false);
-        let _ = writeln!(
-            s,
-            r#"<path d="{d}" stroke="{colour}" stroke-width="2"{dash} fill="none"><title>{label}</title></path>"#
+        if poses.is_empty() {
+            continue;
+        }
+        let d = path_data(poses.iter().map(|p| plan.clamped(p.x, p.y)), false);
+        let dash_attr = dash.map_or(String::new(), |d| format!(r#" stroke-dasharray="{d}""#));
+        layers.add(
+            key,
+            label,
+            Swatch::Line(colour, 2.0, dash),
+            &format!(
+                r#"<path d="{d}" stroke="{colour}" stroke-width="2"{dash_attr} fill="none"/>"#
+            ),
         );
     }
-    for (p, colour) in [
-        (record.final_truth, "#1a9850"),
-        (record.final_odometry, "#d73027"),
+    let start = record.true_path.first().map_or(world.start, |p| p.1);
+    let (sx, sy) = plan.clamped(start.x, start.y);
+    layers.add(
+        "start",
+        "start",
+        Swatch::Square("black"),
+        &format!(
+            r#"<rect x="{:.1}" y="{:.1}" width="10" height="10" fill="black"/>"#,
+            sx - 5.0,
+            sy - 5.0
+        ),
+    );
+    for (p, colour, key, label) in [
+        (record.final_truth, TRUTH, "end-truth", "end, true pose"),
+        (
+            record.final_odometry,
+            ODOMETRY,
+            "end-odometry",
+            "end, by odometry",
+        ),
     ] {
+        let (x, y) = plan.clamped(p.x, p.y);
         let (hx, hy) = p.transform_point(0.3, 0.0);
-        let _ = writeln!(
-            s,
-            r#"<circle cx="{:.1}" cy="{:.1}" r="6" fill="none" stroke="{colour}" stroke-width="2"/><line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="{colour}" stroke-width="2"/>"#,
-            f.x(p.x),
-            f.y(p.y),
-            f.x(p.x),
-            f.y(p.y),
-            f.x(hx),
-            f.y(hy)
+        let (hx, hy) = plan.clamped(hx, hy);
+        layers.add(
+            key,
+            label,
+            Swatch::Pose(colour),
+            &format!(
+                r#"<circle cx="{x:.1}" cy="{y:.1}" r="6" fill="none" stroke="{colour}" stroke-width="2"/><line x1="{x:.1}" y1="{y:.1}" x2="{hx:.1}" y2="{hy:.1}" stroke="{colour}" stroke-width="2"/>"#
+            ),
         );
     }
 
-    // Legend, figures and scale bar.
-    let top = height - legend_height + 8.0;
-    for (i, (colour, label)) in legend.iter().enumerate() {
-        let x = 12.0 + LEGEND_COLUMN * (i % columns) as f64;
-        let y = top + 20.0 * (i / columns) as f64;
-        let _ = writeln!(
-            s,
-            r#"<rect x="{x:.0}" y="{y:.0}" width="18" height="6" fill="{colour}"/><text x="{:.0}" y="{:.0}">{label}</text>"#,
-            x + 24.0,
-            y + 7.0
-        );
-    }
-    let figures_y = top + 20.0 * legend_rows as f64 + 6.0;
+    // Legend, figures and scale bar below the plan.
+    let width = (plan.origin[0] + plan.width() + PAD).max(LEGEND_COLUMN + 2.0 * PAD);
+    let columns = (((width - 2.0 * PAD) / LEGEND_COLUMN).floor() as usize).clamp(1, 3);
+    let legend_top = plan.origin[1] + plan.height() + Plan::BELOW + 12.0;
+    let figures_y = legend_top + 20.0 * layers.rows(columns) as f64 + 10.0;
+    let figures_lines = 2 + usize::from(record.localisation.is_some());
+    let bar_y = figures_y + 18.0 * figures_lines as f64 + 8.0;
+    let height = bar_y + 12.0;
+    let mut s = String::new();
     let _ = writeln!(
         s,
-        r#"<text x="12" y="{figures_y:.0}">{}: {} scans, {:.1} m in {:.1} s, seed {}{}</text>"#,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{height:.0}" viewBox="0 0 {width:.0} {height:.0}" font-family="sans-serif" font-size="13">"#
+    );
+    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    s.push_str(layers.body());
+    s.push_str(&layers.legend(PAD, legend_top, columns, LEGEND_COLUMN));
+    let _ = writeln!(
+        s,
+        r#"<text x="{PAD}" y="{figures_y:.0}">{}: {} scan{}, {:.1} m in {:.1} s, seed {}</text>"#,
         xml_escape(&record.scenario),
         record.scans.len(),
+        if record.scans.len() == 1 { "" } else { "s" },
         record.distance_m,
         record.sim_seconds(),
         record.seed,
-        match beyond.get() {
-            0 => String::new(),
-            n => format!("; {n} points beyond the frame (ghosts) not drawn"),
-        }
     );
     let _ = writeln!(
         s,
-        r#"<text x="12" y="{:.0}">final odometry error {:.3} m, {:.2}°</text>"#,
+        r#"<text x="{PAD}" y="{:.0}">final odometry error {:.3} m, {:.2}°</text>"#,
         figures_y + 18.0,
         record.final_odometry_error_m(),
         record.final_odometry_error_deg(),
@@ -283,20 +339,12 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
         let (final_m, final_deg, rms_m, rms_deg) = estimate_errors(record, loc);
         let _ = writeln!(
             s,
-            r#"<text x="12" y="{:.0}">estimate ({}): final error {final_m:.3} m, {final_deg:.2}°; RMS {rms_m:.3} m, {rms_deg:.2}°</text>"#,
+            r#"<text x="{PAD}" y="{:.0}">estimate ({}): final error {final_m:.3} m, {final_deg:.2}°; RMS {rms_m:.3} m, {rms_deg:.2}°</text>"#,
             figures_y + 36.0,
             loc.matcher,
         );
     }
-    let bar_x = width - 12.0 - SCALE;
-    let bar_y = figures_y + 14.0;
-    let _ = writeln!(
-        s,
-        r#"<line x1="{bar_x:.0}" y1="{bar_y:.0}" x2="{:.0}" y2="{bar_y:.0}" stroke="black" stroke-width="3"/><text x="{:.0}" y="{:.0}">1 m</text>"#,
-        bar_x + SCALE,
-        bar_x + SCALE / 2.0 - 10.0,
-        bar_y - 6.0
-    );
+    s.push_str(&plan.scale_bar(width - PAD - 4.0, bar_y));
     s.push_str("</svg>\n");
     s
 }
@@ -358,50 +406,43 @@ pub(super) fn path_data(points: impl IntoIterator<Item = (f64, f64)>, closed: bo
     d
 }
 
-/// Text safe inside SVG markup.
-pub(super) fn xml_escape(text: &str) -> String {
-    text.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-}
-
 /// One wedge per transducer, from the transducer out to its echo; a dashed ray for no echo.
-fn draw_sonar(s: &mut String, f: &Frame, sonar: &crate::record::SonarRecord) {
+fn draw_sonar(plan: &Plan, sonar: &crate::record::SonarRecord) -> String {
     use robot::hardware::{SPEED_OF_SOUND, echo_distance_m};
+    let mut s = String::new();
     let e = &sonar.echoes;
     for (i, &k) in e.sequence.iter().enumerate() {
         let Some(mount) = sonar.transducers.get(usize::from(k)) else {
             continue;
         };
         let at = sonar.truth.compose(mount);
+        let (ax, ay) = plan.clamped(at.x, at.y);
         match echo_distance_m(e.times[i], SPEED_OF_SOUND) {
             Some(d) => {
+                // A wedge: straight sides out to the echo, a polyline along the arc, all within
+                // the frame.
                 let half = sonar.cone / 2.0;
-                let (x1, y1) = at.transform_point(d * half.cos(), -d * half.sin());
-                let (x2, y2) = at.transform_point(d * half.cos(), d * half.sin());
-                let r = d * SCALE;
-                let _ = writeln!(
+                let mut d_path = format!("M{ax:.1} {ay:.1}");
+                for j in 0..=8 {
+                    let a = -half + 2.0 * half * f64::from(j) / 8.0;
+                    let (x, y) = at.transform_point(d * a.cos(), d * a.sin());
+                    let (x, y) = plan.clamped(x, y);
+                    let _ = write!(d_path, "L{x:.1} {y:.1}");
+                }
+                let _ = write!(
                     s,
-                    r##"<path d="M{:.1} {:.1}L{:.1} {:.1}A{r:.1} {r:.1} 0 0 0 {:.1} {:.1}Z" fill="#9b59b6" fill-opacity="0.18" stroke="#7d3c98" stroke-width="1.2"><title>sonar {k}: {d:.2} m</title></path>"##,
-                    f.x(at.x),
-                    f.y(at.y),
-                    f.x(x1),
-                    f.y(y1),
-                    f.x(x2),
-                    f.y(y2)
+                    r##"<path d="{d_path}Z" fill="#9b59b6" fill-opacity="0.18" stroke="#7d3c98" stroke-width="1.2"><title>sonar {k}: {d:.2} m</title></path>"##
                 );
             }
             None => {
                 let (x, y) = at.transform_point(0.6, 0.0);
-                let _ = writeln!(
+                let (x, y) = plan.clamped(x, y);
+                let _ = write!(
                     s,
-                    r##"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="#7d3c98" stroke-width="1.2" stroke-dasharray="3 3"><title>sonar {k}: no echo</title></line>"##,
-                    f.x(at.x),
-                    f.y(at.y),
-                    f.x(x),
-                    f.y(y)
+                    r##"<line x1="{ax:.1}" y1="{ay:.1}" x2="{x:.1}" y2="{y:.1}" stroke="#7d3c98" stroke-width="1.2" stroke-dasharray="3 3"><title>sonar {k}: no echo</title></line>"##
                 );
             }
         }
     }
+    s
 }

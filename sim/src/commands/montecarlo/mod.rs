@@ -895,6 +895,10 @@ pub struct MontecarloArgs {
     /// Run at most this many trials now and stop (run again to go on).
     #[arg(long)]
     max_trials: Option<u64>,
+    /// A smaller study of the same design: N trials per outlier rate instead of the file's, with
+    /// its own table (its output folder holds that smaller study).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
+    trials: Option<u64>,
     /// Print nothing but errors.
     #[arg(long, short)]
     quiet: bool,
@@ -932,12 +936,19 @@ pub fn main(args: MontecarloArgs) -> Result<(), super::CommandError> {
     let path = args
         .study
         .expect("clap requires the study without a subcommand");
-    let study = Study::load(&path)?;
-    let dir = args.out.unwrap_or_else(|| default_dir(&study));
+    let mut study = Study::load(&path)?;
+    if let Some(trials) = args.trials {
+        study = study.with_trials_per_rate(trials);
+    }
+    // A smaller study gets a folder of its own: it never meets the full study's trials.
+    let dir = args.out.unwrap_or_else(|| match args.trials {
+        Some(n) => PathBuf::from("out").join(format!("montecarlo-{}-{n}-per-rate", study.name)),
+        None => default_dir(&study),
+    });
     let bar = super::bar(
         args.quiet,
-        0,
-        "{prefix} [{bar:30}] {pos}/{len} trials {per_sec} ETA {eta}",
+        args.shard.count_of(study.total_trials()),
+        "{prefix} [{bar:30}] {pos}/{len} trials {rate} ETA {eta}",
     );
     bar.set_prefix(format!("{} (shard {})", study.name, args.shard));
     let options = RunOptions {

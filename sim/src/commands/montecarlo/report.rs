@@ -268,61 +268,51 @@ fn colour_of(kind: MatcherKind, k: usize) -> &'static str {
 /// The cumulative distributions of e_θ (top) and e_t (bottom) per rate (columns), one curve per
 /// matcher and one (dashed) for the odometry guess they start from, on logarithmic axes.
 fn errors_svg(study: &Study, records: &[Record]) -> String {
-    let (pw, ph, margin) = (420.0, 260.0, 60.0);
+    use crate::output::figure::{Layers, Swatch, xml_escape};
+    let (pw, ph, margin) = (420.0, 260.0, 70.0);
     let cols = study.outlier_rates.len();
     let width = margin + cols as f64 * (pw + margin);
-    let height = 70.0 + 2.0 * (ph + margin) + 30.0;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{height:.0}" viewBox="0 0 {width:.0} {height:.0}" font-family="sans-serif" font-size="12">"#
-    );
-    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
-    let _ = writeln!(
-        s,
-        r#"<text x="{margin}" y="24" font-size="16">{}: share of trials with an error at most x ({} trials per rate)</text>"#,
-        study.name, study.trials_per_rate
-    );
-    let legend = std::iter::once(("odometry (the guess)".to_string(), "#555")).chain(
-        study
-            .matchers
-            .iter()
-            .enumerate()
-            .map(|(k, m)| (m.to_string(), colour_of(*m, k))),
-    );
-    for (k, (name, colour)) in legend.enumerate() {
-        let x = margin + k as f64 * 150.0;
-        let _ = writeln!(
-            s,
-            r#"<line x1="{x}" y1="44" x2="{}" y2="44" stroke="{colour}" stroke-width="3"/><text x="{}" y="48">{name}</text>"#,
-            x + 24.0,
-            x + 30.0
-        );
-    }
+    let column = 190.0;
+    let columns = (((width - margin) / column).floor() as usize).max(1);
+    let entries = study.matchers.len() + 1;
+    let legend_rows = entries.div_ceil(columns);
+    let top = 60.0 + 20.0 * legend_rows as f64 + 30.0;
+    let height = top + 2.0 * (ph + margin);
+    let mut layers = Layers::default();
     let axes = [
         ("e_θ (degrees)", -3.0, 2.0),
         ("e_t (millimetres)", -1.0, 4.0),
     ];
+    let mut curves: Vec<String> = vec![String::new(); entries];
     for (row, (label, lo, hi)) in axes.iter().enumerate() {
         for (col, &rate) in study.outlier_rates.iter().enumerate() {
             let x0 = margin + col as f64 * (pw + margin);
-            let y0 = 70.0 + row as f64 * (ph + margin);
-            let _ = writeln!(
-                s,
+            let y0 = top + row as f64 * (ph + margin);
+            let mut frame = String::new();
+            let _ = write!(
+                frame,
                 r##"<rect x="{x0}" y="{y0}" width="{pw}" height="{ph}" fill="none" stroke="#888"/>"##
             );
-            let _ = writeln!(
-                s,
+            let _ = write!(
+                frame,
                 r#"<text x="{}" y="{}">{label}, {} % outliers</text>"#,
                 x0,
-                y0 - 6.0,
+                y0 - 14.0,
                 format_rate(rate)
+            );
+            let _ = write!(
+                frame,
+                r##"<text x="{:.1}" y="{:.1}" text-anchor="middle" fill="#555" transform="rotate(-90 {:.1} {:.1})">share of trials</text>"##,
+                x0 - 40.0,
+                y0 + ph / 2.0,
+                x0 - 40.0,
+                y0 + ph / 2.0
             );
             let mut decade = *lo;
             while decade <= *hi + 1e-9 {
                 let gx = x0 + (decade - lo) / (hi - lo) * pw;
-                let _ = writeln!(
-                    s,
+                let _ = write!(
+                    frame,
                     r##"<line x1="{gx:.1}" y1="{y0}" x2="{gx:.1}" y2="{}" stroke="#eee"/><text x="{gx:.1}" y="{}" text-anchor="middle">{}</text>"##,
                     y0 + ph,
                     y0 + ph + 14.0,
@@ -330,17 +320,24 @@ fn errors_svg(study: &Study, records: &[Record]) -> String {
                 );
                 decade += 1.0;
             }
+            let _ = write!(
+                frame,
+                r##"<text x="{:.1}" y="{:.1}" text-anchor="middle" fill="#555">{label}, logarithmic</text>"##,
+                x0 + pw / 2.0,
+                y0 + ph + 30.0
+            );
             for q in [0.0, 0.5, 1.0] {
                 let gy = y0 + ph * (1.0 - q);
-                let _ = writeln!(
-                    s,
+                let _ = write!(
+                    frame,
                     r#"<text x="{}" y="{:.1}" text-anchor="end">{q}</text>"#,
                     x0 - 4.0,
                     gy + 4.0
                 );
             }
-            let curves = std::iter::once(None).chain(study.matchers.iter().map(Some));
-            for (k, kind) in curves.enumerate() {
+            layers.plain(&frame);
+            let kinds = std::iter::once(None).chain(study.matchers.iter().map(Some));
+            for (k, kind) in kinds.enumerate() {
                 let first = study.matchers[0];
                 let mut values: Vec<f64> = records
                     .iter()
@@ -363,7 +360,7 @@ fn errors_svg(study: &Study, records: &[Record]) -> String {
                     if i % step != 0 && i + 1 != n {
                         continue;
                     }
-                    let lx = v.max(10f64.powf(*lo)).log10().min(*hi);
+                    let lx = v.max(10f64.powf(*lo)).log10().clamp(*lo, *hi);
                     let px = x0 + (lx - lo) / (hi - lo) * pw;
                     let py = y0 + ph * (1.0 - (i + 1) as f64 / n as f64);
                     let _ = write!(
@@ -376,14 +373,43 @@ fn errors_svg(study: &Study, records: &[Record]) -> String {
                     None => ("#555", r#" stroke-dasharray="6 4""#),
                     Some(kind) => (colour_of(*kind, k), ""),
                 };
-                let _ = writeln!(
-                    s,
+                let _ = write!(
+                    curves[k],
                     r#"<path d="{}" fill="none" stroke="{colour}" stroke-width="2"{dash}/>"#,
                     d.trim_end()
                 );
             }
         }
     }
+    layers.add(
+        "odometry",
+        "odometry (the guess)",
+        Swatch::Line("#555", 2.0, Some("6 4")),
+        &curves[0],
+    );
+    for (k, kind) in study.matchers.iter().enumerate() {
+        let colour = colour_of(*kind, k + 1);
+        layers.add(
+            &format!("matcher-{kind}"),
+            kind.to_string(),
+            Swatch::Line(colour, 2.0, None),
+            &curves[k + 1],
+        );
+    }
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{height:.0}" viewBox="0 0 {width:.0} {height:.0}" font-family="sans-serif" font-size="12">"#
+    );
+    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    let _ = writeln!(
+        s,
+        r#"<text x="{margin}" y="24" font-size="16">{}: share of trials with an error at most x ({} trials per rate)</text>"#,
+        xml_escape(&study.name),
+        study.trials_per_rate
+    );
+    s.push_str(layers.body());
+    s.push_str(&layers.legend(margin, 50.0, columns, column));
     s.push_str("</svg>\n");
     s
 }
