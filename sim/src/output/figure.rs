@@ -8,6 +8,9 @@
 
 use std::fmt::Write as _;
 
+/// The colour of the marks of points beyond a view.
+pub const BEYOND: &str = "#7a7a7a";
+
 /// How a legend entry shows its layer.
 #[derive(Clone, Debug)]
 pub enum Swatch {
@@ -52,6 +55,24 @@ impl Layers {
                 swatch,
             });
         }
+    }
+
+    /// Adds the marks of `count` points that fell beyond a view (path data `d` of zero-length
+    /// segments at its edge), listed as "N points beyond …" (`noun`: "point", "reading"; `view`:
+    /// which view).
+    pub fn add_beyond(&mut self, count: usize, noun: &str, view: &str, d: &str, width: f64) {
+        if count == 0 || d.is_empty() {
+            return;
+        }
+        let plural = if count == 1 { "" } else { "s" };
+        self.add(
+            "beyond",
+            format!("{count} {noun}{plural} beyond {view}, at its edge"),
+            Swatch::Dots(BEYOND),
+            &format!(
+                r#"<path d="{d}" stroke="{BEYOND}" stroke-width="{width}" stroke-linecap="square" fill="none"/>"#
+            ),
+        );
     }
 
     /// Adds drawing that needs no legend entry (grids, axes, captions).

@@ -83,7 +83,6 @@ const ODOMETRY: &str = "#d73027";
 const DRIFTED: &str = "#f08a24";
 const ESTIMATE: &str = "#6a3d9a";
 const ESTIMATE_SCANS: &str = "#b07cd8";
-const BEYOND: &str = "#7a7a7a";
 
 /// Writes the map picture.
 pub fn write_map_svg(
@@ -208,16 +207,7 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
         Swatch::Dots(ESTIMATE_SCANS),
         &estimated,
     );
-    if !beyond.is_empty() {
-        layers.add(
-            "beyond",
-            format!("{beyond_count} point{} beyond the frame, at its edge", if beyond_count == 1 { "" } else { "s" }),
-            Swatch::Dots(BEYOND),
-            &format!(
-                r#"<path d="{beyond}" stroke="{BEYOND}" stroke-width="3" stroke-linecap="square" fill="none"/>"#
-            ),
-        );
-    }
+    layers.add_beyond(beyond_count, "point", "the frame", &beyond, 3.0);
 
     // The sonar ring's last reading: a wedge per transducer out to its echo.
     if let Some(sonar) = &record.sonar {

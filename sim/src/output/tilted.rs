@@ -55,7 +55,6 @@ fn kind_legend(kind: PointKind) -> (&'static str, &'static str) {
 }
 
 const KINDS: [PointKind; 3] = [PointKind::Surface, PointKind::Floor, PointKind::Ghost];
-const BEYOND: &str = "#7a7a7a";
 const LASER: &str = "#d73027";
 
 fn render(r: &ScanRecord, world: &WorldDescription, scenario: &str) -> String {
@@ -232,16 +231,7 @@ fn render(r: &ScanRecord, world: &WorldDescription, scenario: &str) -> String {
         }
         layers.add(key, label, Swatch::Dots(colour), &body);
     }
-    if !beyond.is_empty() {
-        layers.add(
-            "beyond",
-            format!("{beyond_count} reading{} beyond a view, at its edge", if beyond_count == 1 { "" } else { "s" }),
-            Swatch::Dots(BEYOND),
-            &format!(
-                r#"<path d="{beyond}" stroke="{BEYOND}" stroke-width="4" stroke-linecap="square" fill="none"/>"#
-            ),
-        );
-    }
+    layers.add_beyond(beyond_count, "reading", "a view", &beyond, 4.0);
     let (hx, hy) = (frame.origin[0] + 0.4 * cy, frame.origin[1] + 0.4 * sy);
     let (lx, ly) = plan.clamped(frame.origin[0], frame.origin[1]);
     let (hx, hy) = plan.clamped(hx, hy);
