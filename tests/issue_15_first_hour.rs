@@ -69,6 +69,14 @@ fn the_picture_reader_sees_what_is_outside_and_what_the_legend_misses() {
             .any(|p| p == "in the legend but not drawn: c"),
         "{problems:?}"
     );
+    let nonsense = r#"<svg width="100" height="50" font-size="10"><g data-layer="a"><circle cx="50" cy="20" r="3"/></g><g data-legend="a"><text x="5" y="45">floor at inf m</text></g></svg>"#;
+    assert!(
+        svg::problems(nonsense)
+            .iter()
+            .any(|p| p.contains("\"inf\"")),
+        "{:?}",
+        svg::problems(nonsense)
+    );
     let good = r#"<svg width="100" height="50" font-size="10"><g data-layer="a"><circle cx="50" cy="20" r="3"/></g><g data-legend="a"><text x="5" y="45">a</text></g></svg>"#;
     assert_eq!(svg::problems(good), Vec::<String>::new());
 }

@@ -233,7 +233,7 @@ pub fn read(svg: &str) -> Picture {
 }
 
 /// What is wrong with a picture: elements outside the canvas (or not finite), layers without a
-/// legend entry, legend entries without a layer, empty layers.
+/// legend entry, legend entries without a layer, empty layers, "inf" or "NaN" written.
 pub fn problems(svg: &str) -> Vec<String> {
     let p = read(svg);
     let mut out = Vec::new();
@@ -280,6 +280,13 @@ pub fn problems(svg: &str) -> Vec<String> {
     }
     if p.legend.is_empty() {
         out.push("no legend".into());
+    }
+    // No number a reader cannot use: "inf" or "NaN" as a word anywhere in the text.
+    let words = svg.split(|c: char| !c.is_ascii_alphanumeric());
+    for bad in ["inf", "NaN", "nan"] {
+        if words.clone().any(|w| w == bad) {
+            out.push(format!("the picture writes {bad:?}"));
+        }
     }
     out
 }

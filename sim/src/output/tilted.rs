@@ -276,7 +276,11 @@ fn render(r: &ScanRecord, world: &WorldDescription, scenario: &str) -> String {
     );
     let trig = if frame.tilt < 0.0 {
         let range = frame.origin[2] / (-frame.tilt.sin() * r.scan.angle(middle).cos());
-        format!("the floor by trigonometry (height / sin tilt) {range:.3} m away")
+        if range.is_finite() && range < 1000.0 {
+            format!("the floor by trigonometry (height / sin tilt) {range:.3} m away")
+        } else {
+            "tilted so little that the plane meets the floor only beyond a kilometre".to_string()
+        }
     } else {
         "tilted up, the plane never meets the floor".to_string()
     };
