@@ -2,12 +2,14 @@
 //!
 //! ```text
 //! twin run scenarios/lab-tour.toml [--out DIR] [--seed N]
-//! twin check scenarios/
+//! twin check scenarios/ [--seeds N]
 //! twin map tests/data/mit-csail.clf [--matcher NAME] [--out DIR]
-//! twin match --matcher lorentz < pairs.jsonl > results.jsonl
+//! twin match --matcher lorentz < tests/data/pairs.jsonl > results.jsonl
+//! twin pairs out/lab-tour > pairs.jsonl
+//! twin view out/survey-lab [--port P]
 //! twin serve scenarios/lab-tour.toml --base tcp:127.0.0.1:4001 --laser tcp:127.0.0.1:4003
 //! twin drive scenarios/lab-tour.toml --base /dev/ttyUSB0 --laser /dev/ttyUSB2 [--out DIR]
-//! twin montecarlo studies/table-5-1.toml [--out DIR] [--threads N] [--shard K/N]
+//! twin montecarlo studies/table-5-1.toml [--out DIR] [--threads N] [--shard K/N] [--trials N]
 //! twin montecarlo merge DIR... --out DIR
 //! twin reconstruct out/survey-lab [--world worlds/lab.toml] [--rule incidence]
 //! ```
@@ -67,6 +69,10 @@ enum Command {
     /// Write a finished run's consecutive level scans as the pairs `twin match` reads (JSON
     /// Lines on stdout, the guess from odometry): `twin pairs out/lab-tour > pairs.jsonl`.
     Pairs(commands::map::PairsArgs),
+    /// Look around a finished run in the browser: the world, the paths, the robot replayed
+    /// scan by scan, the 3D model; navigate it with the thesis's keys or a gamepad. Serves the
+    /// folder on 127.0.0.1 and prints the address.
+    View(commands::view::ViewArgs),
 }
 
 fn main() -> ExitCode {
@@ -80,6 +86,7 @@ fn main() -> ExitCode {
         Command::Reconstruct(args) => commands::reconstruct::main(args),
         Command::Match(args) => commands::map::match_main(args),
         Command::Pairs(args) => commands::map::pairs_main(args),
+        Command::View(args) => commands::view::main(args),
     };
     match outcome {
         Ok(()) => ExitCode::SUCCESS,

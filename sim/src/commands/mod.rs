@@ -27,6 +27,7 @@ pub mod montecarlo;
 pub mod reconstruct;
 pub mod run;
 pub mod serve;
+pub mod view;
 
 use crate::config::ConfigError;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -74,6 +75,9 @@ pub enum CommandError {
         /// Why this input needs it.
         why: String,
     },
+    /// `twin view` cannot serve.
+    #[error(transparent)]
+    View(#[from] view::ViewError),
     /// A file cannot be opened or read.
     #[error("{}: {source}", path.display())]
     Read {
