@@ -168,6 +168,18 @@ fn the_page_draws_the_run_and_the_thesis_keys_move_its_camera() {
     assert_eq!(r["keys"]["x"]["points"], true, "{r}");
     assert_eq!(r["keys"]["c"]["edges"], true, "{r}");
     assert_eq!(r["keys"]["f"]["fill"], false, "{r}");
+    // The gamepad's left stick forward is the up arrow.
+    let before_pad = &r["keys"]["f"];
+    let pad = &r["keys"]["gamepadForward"];
+    let moved = (num(pad, &["x"]) - num(before_pad, &["x"]))
+        .hypot(num(pad, &["y"]) - num(before_pad, &["y"]));
+    assert!(
+        (moved - 0.057125).abs() < 1e-9,
+        "the gamepad moves the robot: {r}"
+    );
+    // The save button's PNG.
+    assert_eq!(r["png"]["type"], "data:image/png", "{r}");
+    assert!(num(&r, &["png", "bytes"]) > 10_000.0, "{r}");
     assert!(
         num(&r, &["fps"]) > 0.0 && num(&r, &["firstFrameMs"]) > 0.0,
         "{r}"

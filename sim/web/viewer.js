@@ -493,6 +493,14 @@ async function selftest() {
   for (let i = 0; i < 40; i++) press('w');
   keys.w40 = snap();
   press('x'); press('c'); press('f');
+  // A gamepad: the left stick pushed forward for one poll moves the robot one step.
+  const realPads = navigator.getGamepads;
+  navigator.getGamepads = () => [{ axes: [0, -1, 0, 0], buttons: [] }];
+  pollGamepad();
+  navigator.getGamepads = realPads;
+  keys.gamepadForward = snap();
+  // The PNG the save button downloads.
+  const png = renderer.domElement.toDataURL('image/png');
   // Navigate for two seconds of real time and count frames.
   const frames0 = state.frames, t0 = performance.now();
   await new Promise((resolve) => {
@@ -501,7 +509,7 @@ async function selftest() {
   });
   const fps = (state.frames - frames0) / ((performance.now() - t0) / 1000);
   const report = {
-    pixels, before, keys, fps, firstFrameMs: state.firstFrameMs, model: state.model,
+    pixels, before, keys, fps, png: { type: png.slice(0, 14), bytes: Math.floor(png.length * 3 / 4) }, firstFrameMs: state.firstFrameMs, model: state.model,
     scans: run.scans.length, messages, webgl: renderer.capabilities.isWebGL2 ? 2 : 1,
   };
   await fetch('/selftest', { method: 'POST', body: JSON.stringify(report) });
