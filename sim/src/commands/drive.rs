@@ -217,6 +217,8 @@ pub fn write_drive(
             placed.iter().map(|p| (p.stamp, p.estimate)),
         )?;
     }
+    // The world as the scenario declares it (the real room may differ), for `twin view`.
+    crate::output::write_world_json(&file("world.json"), scenario)?;
     let mount = scenario.robot.mount();
     write_scan_lines(
         &file("scans.jsonl"),

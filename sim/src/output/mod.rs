@@ -18,6 +18,7 @@ mod svg;
 mod tilted;
 mod tum;
 mod world_json;
+pub use world_json::write_world_json;
 
 pub use ply::write_ply;
 pub use reconstruction::{
@@ -117,7 +118,7 @@ pub fn write_all(record: &RunRecord, scenario: &Scenario, dir: &Path) -> std::io
         write_sonar(&file("sonar.json"), sonar)?;
     }
     write_map_svg(&file("map.svg"), record, &scenario.world)?;
-    world_json::write_world_json(&file("world.json"), scenario)?;
+    write_world_json(&file("world.json"), scenario)?;
     if let Some(scan) = last_tilted(record) {
         write_tilted_svg(
             &file("tilted-scan.svg"),
