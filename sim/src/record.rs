@@ -58,6 +58,9 @@ pub struct RunRecord {
     pub distance_m: f64,
     /// Contacts with walls.
     pub collisions: u32,
+    /// Motions that ended short of their target with the motors on, stopped with `p`
+    /// (`robot::control::tour::STALL`).
+    pub stalled_motions: usize,
     /// The true pose at the end.
     pub final_truth: Pose2,
     /// The odometry at the end.

@@ -154,6 +154,43 @@ pub struct TourReport {
     pub final_odometry: Pose2,
     /// The stamp of the last status report.
     pub end: Stamp,
+    /// Motions that ended short of their target with the motors left on, stopped with `p`
+    /// (see [`STALL`]).
+    pub stalled: usize,
+}
+
+/// A motion whose counters have not moved for this long (robot time) while the firmware still
+/// reports its motors on has ended short of its target. The firmware (App. A) brakes from the
+/// point where the distance left equals the distance it took to accelerate, one speed step every
+/// `k_ms_inc`, down to zero; the motors are switched off only when both wheels have passed
+/// `clicks_stop`. When the ramp reaches zero speed a few counts short — which the timing of the
+/// main loop decides, and answering `l` polls while moving shifts that timing — the wheels stand
+/// still with the motors on for ever. The tour then stops them with `p`, as a driver would.
+pub const STALL: Duration = Duration::from_millis(500);
+
+/// Watches a motion's counters for a stall.
+#[derive(Default)]
+struct Still {
+    /// The counters last seen and since when they have not changed.
+    since: Option<((u32, u32), Stamp)>,
+}
+
+impl Still {
+    /// Whether the counters in `status` have not moved for [`STALL`] with the motors on, once
+    /// the motion has begun (a slow ramp may take a while to move the wheels at all).
+    fn stalled(&mut self, status: &DriveStatus) -> bool {
+        let counts = (status.left_counts, status.right_counts);
+        if counts == (0, 0) {
+            return false;
+        }
+        match self.since {
+            Some((seen, at)) if seen == counts => status.stamp.saturating_since(at) >= STALL,
+            _ => {
+                self.since = Some((counts, status.stamp));
+                false
+            }
+        }
+    }
 }
 
 /// Runs `steps` on `robot`, starting the odometry at `start`, and reports to `observer`.
@@ -178,6 +215,7 @@ where
         last_status: None,
         scans: 0,
         scenes: 0,
+        stalled: 0,
         station: None,
         stations: 0,
     };
@@ -198,6 +236,7 @@ where
         scenes: tour.scenes,
         final_odometry: tour.odometer.pose(),
         end: tour.last_status.map_or(Stamp::ZERO, |s| s.stamp),
+        stalled: tour.stalled,
     })
 }
 
@@ -246,6 +285,8 @@ struct Tour {
     station: Option<usize>,
     /// Stations so far.
     stations: usize,
+    /// Motions stopped short with `p`.
+    stalled: usize,
 }
 
 impl Tour {
@@ -443,6 +484,7 @@ impl Tour {
             .as_millis()
             .clamp(1, u128::from(u16::MAX)) as u16;
         let mut started: Option<Stamp> = None;
+        let mut still = Still::default();
         let stopped = loop {
             robot
                 .wait_drive(DriveWait::motors(wait_ms))
@@ -450,6 +492,9 @@ impl Tour {
             let status = self.poll_status(robot, observer)?;
             if status.is_idle() {
                 break status;
+            }
+            if still.stalled(&status) {
+                break self.stop_short(robot, observer)?;
             }
             let t0 = *started.get_or_insert(status.stamp);
             if status.stamp.saturating_since(t0) > self.config.motion_timeout {
@@ -472,9 +517,14 @@ impl Tour {
         F: FnMut(TourEvent<'_>),
     {
         let mut started: Option<Stamp> = None;
+        let mut still = Still::default();
         loop {
             let status = self.service(robot, period, observer)?;
             if status.is_idle() {
+                return Ok(());
+            }
+            if still.stalled(&status) {
+                self.stop_short(robot, observer)?;
                 return Ok(());
             }
             let t0 = *started.get_or_insert(status.stamp);
@@ -482,6 +532,23 @@ impl Tour {
                 return Err(Failure::Stuck(self.config.motion_timeout));
             }
         }
+    }
+
+    /// Stops a motion that ended short of its target (see [`STALL`]) with `p`, and reads the
+    /// counters once more.
+    fn stop_short<R, F>(
+        &mut self,
+        robot: &mut R,
+        observer: &mut F,
+    ) -> Result<DriveStatus, Failure<R::Error>>
+    where
+        R: DriveBase + Laser,
+        F: FnMut(TourEvent<'_>),
+    {
+        robot.drive(DriveCommand::Stop).map_err(Failure::Hardware)?;
+        self.odometer.commanded(&DriveCommand::Stop);
+        self.stalled += 1;
+        self.poll_status(robot, observer)
     }
 
     /// Waits for a scan (at most `period`), then polls the base.

@@ -178,6 +178,7 @@ pub fn run_scenario(
         wall_seconds: started.elapsed().as_secs_f64(),
         distance_m: twin.distance_travelled(),
         collisions: twin.collisions(),
+        stalled_motions: report.stalled,
         final_truth: twin.true_pose(),
         final_odometry: report.final_odometry,
         true_path: twin.true_path().collect(),

@@ -35,6 +35,8 @@ pub struct Summary {
     pub steps: usize,
     /// Contacts with walls.
     pub collisions: u32,
+    /// Motions that ended a few counts short with the motors on, stopped by the tour with `p`.
+    pub stalled_motions: usize,
     /// State of charge of the motor batteries at the end.
     pub motor_battery_charge: f64,
     /// How well the scan-matching estimate followed the truth, when the run localised.
@@ -122,6 +124,7 @@ impl Summary {
             scans: record.scans.len(),
             steps: record.steps,
             collisions: record.collisions,
+            stalled_motions: record.stalled_motions,
             motor_battery_charge: record.battery_charge.1,
             localisation: record
                 .localisation
