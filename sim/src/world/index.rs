@@ -6,7 +6,8 @@
 //! segment, a cap's polygon) comes within `reach` of it. A point's nearest surface among its
 //! cell's list, the floor and the ceiling is the true nearest whenever it is within `reach`: a
 //! surface that close in 3D is that close in the plan, so it is in the list. Farther points (a
-//! ghost behind glass, an outlier, a point off the plan) fall back to all surfaces.
+//! ghost behind glass, an outlier, a point off the plan) search rings of cells outwards until no
+//! unseen surface can be nearer: the cost follows the distance, not the number of surfaces.
 
 use super::map::{Cap, Face, point_segment_distance};
 
@@ -129,26 +130,6 @@ impl SurfaceIndex {
         }
     }
 
-    /// The surfaces listed for the cell holding `(x, y)`, or `None` off the grid.
-    #[inline]
-    fn near(&self, x: f64, y: f64) -> Option<&[SurfaceId]> {
-        // Off the grid below its origin (or NaN): no list. Above, truncation is the floor
-        // (and cheaper than `f64::floor` without SSE4.1).
-        let (u, v) = (
-            (x - self.origin[0]) / self.cell,
-            (y - self.origin[1]) / self.cell,
-        );
-        if !(u >= 0.0 && v >= 0.0) {
-            return None;
-        }
-        let (i, j) = (u as usize, v as usize);
-        if i >= self.size[0] || j >= self.size[1] {
-            return None;
-        }
-        let k = j * self.size[0] + i;
-        Some(&self.items[self.starts[k] as usize..self.starts[k + 1] as usize])
-    }
-
     /// The nearest surface to `p` and its distance, exactly.
     pub(super) fn nearest(
         &self,
@@ -175,19 +156,57 @@ impl SurfaceIndex {
                 *best = (d, id);
             }
         };
-        let mut exact = false;
-        if let Some(list) = self.near(p[0], p[1]) {
-            for &id in list {
-                consider(&mut best, id);
-            }
-            exact = best.0 <= self.reach * self.reach;
+        // Rings of cells around the cell of `p` (or of its projection onto the grid, for a point
+        // off the plan), nearest first. Once rings 0..=r are seen, an unseen surface is farther
+        // than r cells plus `reach` (its nearest footprint point would otherwise be within
+        // `reach` of a seen cell, which lists it): stop when the best is within that.
+        if self.size[0] == 0 || self.size[1] == 0 {
+            return (best.0.sqrt(), best.1);
         }
-        if !exact {
-            for n in 0..faces.len() {
-                consider(&mut best, SurfaceId::Face(n as u32));
+        let cell_of = |x: f64, k: usize| {
+            let u = (x - self.origin[k]) / self.cell;
+            // NaN and points below the origin go to the first cell, points beyond to the last.
+            if u >= 0.0 {
+                (u as usize).min(self.size[k] - 1)
+            } else {
+                0
             }
-            for n in 0..caps.len() {
-                consider(&mut best, SurfaceId::Cap(n as u32));
+        };
+        let (ci, cj) = (cell_of(p[0], 0), cell_of(p[1], 1));
+        let rings = self.size[0].max(self.size[1]);
+        for r in 0..=rings {
+            let (i0, i1) = (ci.saturating_sub(r), (ci + r).min(self.size[0] - 1));
+            let (j0, j1) = (cj.saturating_sub(r), (cj + r).min(self.size[1] - 1));
+            let mut visit = |i: usize, j: usize| {
+                let k = j * self.size[0] + i;
+                for &id in &self.items[self.starts[k] as usize..self.starts[k + 1] as usize] {
+                    consider(&mut best, id);
+                }
+            };
+            // The ring's own cells: its top and bottom rows, then its side columns between.
+            for j in [cj.checked_sub(r), Some(cj + r)].into_iter().flatten() {
+                if j < self.size[1] && (r > 0 || j == cj) {
+                    for i in i0..=i1 {
+                        visit(i, j);
+                    }
+                }
+                if r == 0 {
+                    break;
+                }
+            }
+            if r > 0 {
+                let (below, above) = ((cj + 1).saturating_sub(r).max(j0), (cj + r - 1).min(j1));
+                for i in [ci.checked_sub(r), Some(ci + r)].into_iter().flatten() {
+                    if i < self.size[0] {
+                        for j in below..=above {
+                            visit(i, j);
+                        }
+                    }
+                }
+            }
+            let bound = r as f64 * self.cell + self.reach;
+            if best.0 <= bound * bound {
+                break;
             }
         }
         (best.0.sqrt(), best.1)
@@ -202,18 +221,47 @@ mod tests {
 
     #[test]
     fn the_grid_finds_the_same_nearest_distance_as_every_surface() {
-        let world = WorldDescription::load(
+        let lab = WorldDescription::load(
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../worlds/lab.toml"),
         )
         .unwrap();
-        let map = WorldMap::new(&world);
+        // And a cluttered one: 300 small boxes and tables of random heights in a 30 m hall.
+        let mut rng = crate::rng::stream(11, "boxes");
+        let mut text = String::from(
+            "name = \"hall\"\n[start]\nx = 1.0\ny = 1.0\nheading_deg = 0.0\n[[wall]]\npoints = [[0, 0], [30, 0], [30, 12], [0, 12]]\nclosed = true\n",
+        );
+        for k in 0..300 {
+            let (x, y) = (
+                rng.random::<f64>() * 29.0 + 0.5,
+                rng.random::<f64>() * 11.0 + 0.5,
+            );
+            let top = 0.2 + rng.random::<f64>() * 1.5;
+            if k % 3 == 0 {
+                text.push_str(&format!(
+                    "[[table]]\ncenter = [{x}, {y}]\nsize = [0.8, 0.5]\nheight_m = {top}\n"
+                ));
+            } else {
+                text.push_str(&format!(
+                    "[[box]]\ncenter = [{x}, {y}]\nsize = [0.2, 0.1]\nheading_deg = {}\nz = [0.0, {top}]\n",
+                    k * 7
+                ));
+            }
+        }
+        let hall = WorldDescription::parse(&text, "hall.toml").unwrap();
+        for world in [lab, hall] {
+            check_against_brute_force(&world);
+        }
+    }
+
+    fn check_against_brute_force(world: &WorldDescription) {
+        let map = WorldMap::new(world);
         let mut rng = crate::rng::stream(7, "test");
         let (faces, caps) = (map.faces(), map.caps());
         for _ in 0..20_000 {
             // Points on and off the plan, near surfaces and far from them.
             let p = [
-                rng.random::<f64>() * 20.0 - 2.0,
-                rng.random::<f64>() * 12.0 - 2.0,
+                rng.random::<f64>() * 36.0 - 3.0,
+                rng.random::<f64>() * 18.0 - 3.0,
                 rng.random::<f64>() * 3.4 - 0.4,
             ];
             let brute = faces
