@@ -2,6 +2,7 @@
 //! heights, the floor and the ceiling), with ray casts for the sensors, distance queries for the
 //! checks and the pictures, and the scores of a 3D model against the true surfaces ([`score`]).
 
+pub mod clutter;
 mod index;
 mod map;
 pub mod score;
