@@ -44,9 +44,6 @@ impl ScanMatcher for LeastSquares {
         current: &ScanPoints,
         guess: Pose2,
     ) -> MatchResult {
-        if reference.points.is_empty() || current.is_empty() {
-            return MatchResult::unmatched(guess);
-        }
         let gate = self.max_distance_m * self.max_distance_m;
         let mut pose = guess;
         let mut moved = Vec::with_capacity(current.len());

@@ -189,9 +189,6 @@ impl ScanMatcher for Lorentz {
         current: &ScanPoints,
         guess: Pose2,
     ) -> MatchResult {
-        if reference.points.is_empty() || current.is_empty() {
-            return MatchResult::unmatched(guess);
-        }
         let lines = self
             .lines
             .as_ref()

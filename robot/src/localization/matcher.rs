@@ -77,19 +77,20 @@ pub trait ScanMatcher: Send + Sync + fmt::Debug {
     /// Aligns `current` (points in its own laser frame) to a prepared `reference`, starting
     /// from `guess` (the pose of the current frame in the reference frame).
     ///
-    /// Any input is answered: a guess or a point that is not finite or lies farther than
-    /// [`MAX_COORDINATE_M`] gives the guess back, not converged, without calling
+    /// Any input is answered: an empty scan, or a guess or a point that is not finite or lies
+    /// farther than [`MAX_COORDINATE_M`], gives the guess back, not converged, without calling
     /// [`align_plausible`](Self::align_plausible).
     fn align(&self, reference: &Reference, current: &ScanPoints, guess: Pose2) -> MatchResult {
         let pose_ok = plausible([guess.x, guess.y]) && guess.theta.abs() <= MAX_COORDINATE_M;
-        if !(pose_ok && reference.points.is_plausible() && current.is_plausible()) {
+        let filled = !reference.points.is_empty() && !current.is_empty();
+        if !(pose_ok && filled && reference.points.is_plausible() && current.is_plausible()) {
             return MatchResult::unmatched(guess);
         }
         self.align_plausible(reference, current, guess)
     }
 
-    /// [`align`](Self::align) for inputs known to be finite and within [`MAX_COORDINATE_M`]:
-    /// what each matcher implements.
+    /// [`align`](Self::align) for inputs known to be non-empty, finite and within
+    /// [`MAX_COORDINATE_M`]: what each matcher implements.
     fn align_plausible(
         &self,
         reference: &Reference,

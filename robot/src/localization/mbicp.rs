@@ -148,9 +148,6 @@ impl ScanMatcher for Mbicp {
         current: &ScanPoints,
         guess: Pose2,
     ) -> MatchResult {
-        if reference.points.is_empty() || current.is_empty() {
-            return MatchResult::unmatched(guess);
-        }
         // Each current point `p`, in its own frame (the metric is centred on the sensor that
         // measured it), is paired with the reference points brought into that frame by the
         // estimate `r = q⁻¹`; the search runs in the reference's own tree, with `p` taken into the
