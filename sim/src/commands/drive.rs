@@ -218,7 +218,11 @@ pub fn write_drive(
         )?;
     }
     // The world as the scenario declares it (the real room may differ), for `twin view`.
-    crate::output::write_world_json(&file("world.json"), scenario)?;
+    crate::output::write_world_json(
+        &file("world.json"),
+        scenario,
+        &crate::world::WorldMap::new(&scenario.world),
+    )?;
     let mount = scenario.robot.mount();
     write_scan_lines(
         &file("scans.jsonl"),

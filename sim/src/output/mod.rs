@@ -117,18 +117,20 @@ pub fn write_all(record: &RunRecord, scenario: &Scenario, dir: &Path) -> std::io
     if let Some(sonar) = &record.sonar {
         write_sonar(&file("sonar.json"), sonar)?;
     }
-    write_map_svg(&file("map.svg"), record, &scenario.world)?;
-    write_world_json(&file("world.json"), scenario)?;
+    // One map of the world answers every picture's and file's questions about it.
+    let map = crate::world::WorldMap::new(&scenario.world);
+    write_map_svg(&file("map.svg"), record, &scenario.world, &map)?;
+    write_world_json(&file("world.json"), scenario, &map)?;
     if let Some(scan) = last_tilted(record) {
         write_tilted_svg(
             &file("tilted-scan.svg"),
             scan,
             &scenario.world,
+            &map,
             &record.scenario,
         )?;
     }
     if let Some(recon) = &record.reconstruction {
-        let map = crate::world::WorldMap::new(&scenario.world);
         files.extend(write_reconstruction(
             dir,
             recon,

@@ -85,15 +85,17 @@ const ESTIMATE: &str = "#6a3d9a";
 const ESTIMATE_SCANS: &str = "#b07cd8";
 
 /// Writes the map picture.
+/// Writes the map picture of `record` in `world` (`map` is that world's map).
 pub fn write_map_svg(
     path: &Path,
     record: &RunRecord,
     world: &WorldDescription,
+    map: &WorldMap,
 ) -> std::io::Result<()> {
-    std::fs::write(path, render(record, world))
+    std::fs::write(path, render(record, world, map))
 }
 
-fn render(record: &RunRecord, world: &WorldDescription) -> String {
+fn render(record: &RunRecord, world: &WorldDescription, map: &WorldMap) -> String {
     let odometry: Vec<Pose2> =
         std::iter::once(record.true_path.first().map_or(world.start, |p| p.1))
             .chain(record.scans.iter().map(|r| r.odometry))
@@ -120,8 +122,7 @@ fn render(record: &RunRecord, world: &WorldDescription) -> String {
         origin: [PAD + Plan::LEFT, PAD + Plan::ABOVE],
         scale: SCALE,
     };
-    let map = WorldMap::new(world);
-    let points = classify_points(record, &map);
+    let points = classify_points(record, map);
     let mut layers = Layers::default();
     layers.plain(&plan.grid());
     draw_walls(&mut layers, &plan, world, 5.0);

@@ -33,9 +33,10 @@ pub fn write_tilted_svg(
     path: &Path,
     scan: &ScanRecord,
     world: &WorldDescription,
+    map: &WorldMap,
     scenario: &str,
 ) -> std::io::Result<()> {
-    std::fs::write(path, render(scan, world, scenario))
+    std::fs::write(path, render(scan, world, map, scenario))
 }
 
 struct Point {
@@ -57,8 +58,7 @@ fn kind_legend(kind: PointKind) -> (&'static str, &'static str) {
 const KINDS: [PointKind; 3] = [PointKind::Surface, PointKind::Floor, PointKind::Ghost];
 const LASER: &str = "#d73027";
 
-fn render(r: &ScanRecord, world: &WorldDescription, scenario: &str) -> String {
-    let map = WorldMap::new(world);
+fn render(r: &ScanRecord, world: &WorldDescription, map: &WorldMap, scenario: &str) -> String {
     let frame = r.frame;
     let (sy, cy) = frame.yaw.sin_cos();
     let points: Vec<Point> = (0..r.scan.len())
@@ -70,7 +70,7 @@ fn render(r: &ScanRecord, world: &WorldDescription, scenario: &str) -> String {
                 angle,
                 range,
                 xy: [p[0], p[1]],
-                kind: PointKind::of(&map, p),
+                kind: PointKind::of(map, p),
             })
         })
         .collect();

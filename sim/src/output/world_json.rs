@@ -54,9 +54,8 @@ struct World<'a> {
     robot: Body,
 }
 
-/// Writes `scenario`'s world and robot body as JSON.
-pub fn write_world_json(path: &Path, scenario: &Scenario) -> std::io::Result<()> {
-    let map = WorldMap::new(&scenario.world);
+/// Writes `scenario`'s world (`map` is its map) and robot body as JSON.
+pub fn write_world_json(path: &Path, scenario: &Scenario, map: &WorldMap) -> std::io::Result<()> {
     let body = &scenario.robot.body;
     let start = scenario.world.start;
     let world = World {
