@@ -3,7 +3,7 @@
 //! counts short of the target: the firmware then leaves the motors on for ever (App. A). The
 //! tour notices the stall and stops the motion with `p`; before, it waited 120 s and failed.
 
-use robot::control::tour::{Pacing, TourConfig};
+use robot::control::tour::TourConfig;
 use sim::commands::run::{RunOptions, run_scenario};
 use std::time::Duration;
 
@@ -13,12 +13,7 @@ fn polled_lab_tour(baud: u32) -> (sim::record::RunRecord, usize) {
     // The first 25 steps: the campaign's failures came at steps 1, 14 and 23.
     scenario.steps.truncate(25);
     let options = RunOptions {
-        tour: Some(TourConfig {
-            pacing: Pacing::Polling {
-                period: Duration::from_millis(50),
-            },
-            ..TourConfig::default()
-        }),
+        tour: Some(TourConfig::polling(Duration::from_millis(50))),
         ..RunOptions::default()
     };
     let record =

@@ -10,7 +10,7 @@
 //!
 //! `cargo bench --bench scaling`
 
-use robot::control::tour::{Pacing, TourConfig};
+use robot::control::tour::TourConfig;
 use sim::commands::run::{RunOptions, run_scenario};
 use sim::config::{Scenario, WorldDescription};
 use sim::world::WorldMap;
@@ -46,12 +46,7 @@ fn main() {
             scenario.robot.laser.baud = baud;
             scenario.localisation = None;
             let options = RunOptions {
-                tour: Some(TourConfig {
-                    pacing: Pacing::Polling {
-                        period: Duration::from_millis(50),
-                    },
-                    ..TourConfig::default()
-                }),
+                tour: Some(TourConfig::polling(Duration::from_millis(50))),
                 ..RunOptions::default()
             };
             // One run to warm the caches and the allocator, then the timed ones.

@@ -60,6 +60,17 @@ pub struct TourConfig {
     pub motion_timeout: Duration,
 }
 
+impl TourConfig {
+    /// The default tour, polling the base every `period` at most while moving and keeping
+    /// every scan.
+    pub fn polling(period: Duration) -> Self {
+        TourConfig {
+            pacing: Pacing::Polling { period },
+            ..TourConfig::default()
+        }
+    }
+}
+
 impl Default for TourConfig {
     fn default() -> Self {
         TourConfig {
