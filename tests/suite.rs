@@ -10,6 +10,8 @@ mod issue_13_reconstruction;
 mod issue_14_fuzz;
 mod issue_15_first_hour;
 mod issue_16_viewer;
+mod issue_17_fast_laser;
+mod issue_17_fleet;
 mod issue_17_polling;
 mod issue_2_bad_input;
 mod issue_2_collision;

@@ -1,15 +1,20 @@
-//! Sensor throughput: laser scans per second and sonar ring cycles per second.
+//! Sensor throughput: laser scans per second and sonar ring cycles per second, each beside a
+//! reference measured in the same run, interleaved, so the ratios travel between machines.
 //!
 //! - laser: 361 beams traced in 3D against the world's faces, caps, floor and ceiling, with the
 //!   materials' optics (black loss, glass windows and mirrors, metal, grazing loss), Gaussian
 //!   noise and, where named, the random outliers of the thesis's studies; from poses all over
-//!   `worlds/lab.toml` (and `worlds/glass-door.toml`), level and tilted;
+//!   the world, level and tilted. `scan` casts the beams' first legs in one sweep of the faces
+//!   (`WorldMap::cast_plane_fan`); the reference, `scan_per_beam`, casts each beam down the
+//!   world's tree — the same readings, bit for bit (tests/issue_17_fast_laser.rs);
 //! - sonar: one cycle of the ring, 16 transducers each sampling its cone with several rays,
-//!   specular loss and multi-bounce paths.
+//!   specular loss and multi-bounce paths; the reference is the same ring with every ray cast on
+//!   its own to its end.
+//!
+//! Figures are the best of 15 rounds (the least disturbed by the machine's other work).
 //!
 //! `cargo bench --bench laser`
 
-use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use robot::{Pose2, Stamp};
 use sim::config::Outliers;
 use sim::config::{RobotDescription, WorldDescription};
@@ -18,6 +23,9 @@ use sim::devices::sonar::SonarModel;
 use sim::world::WorldMap;
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+const ROUNDS: usize = 15;
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
@@ -39,83 +47,134 @@ fn poses(map: &WorldMap, world: &WorldDescription) -> Vec<Pose2> {
         .collect()
 }
 
-fn laser(robot: &RobotDescription, outliers: &str) -> LaserModel {
-    LaserModel::new(
-        &robot.laser,
-        robot.laser_mount(),
-        robot.laser.sigma_m.get(),
-        Outliers::preset(outliers).expect("a preset"),
-    )
-}
-
-fn scans(c: &mut Criterion) {
-    let pioneer = RobotDescription::load(root().join("scenarios/robots/pioneer-3dx.toml")).unwrap();
-    let mut group = c.benchmark_group("laser");
-    group.throughput(Throughput::Elements(1));
-    for (world_file, outliers, tilt_deg) in [
-        ("lab.toml", "none", 0.0f64),
-        ("lab.toml", "thesis-2pct", 0.0),
-        ("lab.toml", "thesis-20pct", 0.0),
-        ("glass-door.toml", "thesis-2pct", 0.0),
-        ("lab.toml", "thesis-2pct", -13.65),
-    ] {
-        let world = WorldDescription::load(root().join("worlds").join(world_file)).unwrap();
-        let map = WorldMap::new(&world);
-        let poses = poses(&map, &world);
-        let model = laser(&pioneer, outliers);
-        // Tilted: the thesis robot's laser height on its pan-tilt, the plane pitched down.
-        let frames: Vec<LaserFrame> = poses
-            .iter()
-            .map(|&p| {
-                let level = model.frame_on(p);
-                if tilt_deg == 0.0 {
-                    level
-                } else {
-                    LaserFrame {
-                        origin: [level.origin[0], level.origin[1], 1.05],
-                        tilt: f64::to_radians(tilt_deg),
-                        ..level
-                    }
-                }
-            })
-            .collect();
-        let mut k = 0usize;
-        let mut rng = sim::rng::stream(1, "bench");
-        let name = if tilt_deg == 0.0 {
-            format!("{world_file} scan, materials, outliers {outliers}")
-        } else {
-            format!("{world_file} scan tilted {tilt_deg}°, materials, outliers {outliers}")
-        };
-        group.bench_function(name, |b| {
-            b.iter(|| {
-                k = (k + 1) % frames.len();
-                black_box(model.scan(&map, None, frames[k], Stamp(k as u64), &mut rng))
-            })
-        });
+/// Seconds per call of `f` (called `n` times a round), best of [`ROUNDS`], for two functions
+/// measured in alternate rounds.
+fn best_of(n: usize, mut a: impl FnMut(usize), mut b: impl FnMut(usize)) -> (f64, f64) {
+    let (mut ta, mut tb) = (f64::MAX, f64::MAX);
+    for _ in 0..ROUNDS {
+        let t = Instant::now();
+        (0..n).for_each(&mut a);
+        ta = ta.min(t.elapsed().as_secs_f64() / n as f64);
+        let t = Instant::now();
+        (0..n).for_each(&mut b);
+        tb = tb.min(t.elapsed().as_secs_f64() / n as f64);
     }
-    group.finish();
+    (ta, tb)
 }
 
-fn sonar_ring(c: &mut Criterion) {
+fn main() {
+    let pioneer = RobotDescription::load(root().join("scenarios/robots/pioneer-3dx.toml")).unwrap();
+    let lab_text = std::fs::read_to_string(root().join("worlds/lab.toml")).unwrap();
+    println!("| world | scan | sweep, scans/s | reference, scans/s | speed-up |");
+    println!("|---|---|---|---|---|");
+    let cluttered = sim::world::clutter::lab_with_boxes(&lab_text, 72);
+    let worlds = [
+        (
+            "lab",
+            WorldDescription::load(root().join("worlds/lab.toml")).unwrap(),
+        ),
+        (
+            "glass door",
+            WorldDescription::load(root().join("worlds/glass-door.toml")).unwrap(),
+        ),
+        (
+            "lab + 72 boxes",
+            WorldDescription::parse(&cluttered, "lab-80.toml").unwrap(),
+        ),
+    ];
+    for (name, world) in &worlds {
+        let map = WorldMap::new(world);
+        let poses = poses(&map, world);
+        for (outliers, tilt_deg) in [
+            ("none", 0.0f64),
+            ("thesis-2pct", 0.0),
+            ("thesis-20pct", 0.0),
+            ("thesis-2pct", -13.65),
+        ] {
+            if *name != "lab" && (outliers != "thesis-2pct" || tilt_deg != 0.0) {
+                continue;
+            }
+            let model = LaserModel::new(
+                &pioneer.laser,
+                pioneer.laser_mount(),
+                pioneer.laser.sigma_m.get(),
+                Outliers::preset(outliers).expect("a preset"),
+            );
+            // Tilted: the thesis robot's laser height on its pan-tilt, the plane pitched down.
+            let frames: Vec<LaserFrame> = poses
+                .iter()
+                .map(|&p| {
+                    let level = model.frame_on(p);
+                    if tilt_deg == 0.0 {
+                        level
+                    } else {
+                        LaserFrame {
+                            origin: [level.origin[0], level.origin[1], 1.05],
+                            tilt: tilt_deg.to_radians(),
+                            ..level
+                        }
+                    }
+                })
+                .collect();
+            let mut rng = sim::rng::stream(1, "bench");
+            let mut rng2 = sim::rng::stream(1, "bench");
+            let (sweep, reference) = best_of(
+                2000,
+                |k| {
+                    let f = frames[k % frames.len()];
+                    black_box(model.scan(&map, None, f, Stamp(k as u64), &mut rng));
+                },
+                |k| {
+                    let f = frames[k % frames.len()];
+                    black_box(model.scan_per_beam(&map, None, f, Stamp(k as u64), &mut rng2));
+                },
+            );
+            let what = if tilt_deg == 0.0 {
+                format!("level, outliers {outliers}")
+            } else {
+                format!("tilted {tilt_deg}°, outliers {outliers}")
+            };
+            println!(
+                "| {name} ({} faces) | {what} | {:.0} | {:.0} | {:.2} |",
+                map.faces().len(),
+                1.0 / sweep,
+                1.0 / reference,
+                reference / sweep
+            );
+        }
+    }
+    sonar_ring();
+}
+
+fn sonar_ring() {
     let robot = RobotDescription::load(root().join("scenarios/robots/pioneer-3dx.toml")).unwrap();
     let world = WorldDescription::load(root().join("worlds/lab.toml")).unwrap();
     let map = WorldMap::new(&world);
     let poses = poses(&map, &world);
     let ring = SonarModel::new(robot.sonar.as_ref().expect("the Pioneer has a ring"));
-    let mut group = c.benchmark_group("sonar");
-    group.throughput(Throughput::Elements(1));
-    let mut k = 0usize;
     let mut rng = sim::rng::stream(1, "bench");
-    group.bench_function("lab.toml ring cycle, 16 transducers", |b| {
-        b.iter(|| {
-            k = (k + 1) % poses.len();
+    let mut rng2 = sim::rng::stream(1, "bench");
+    let (ring_s, reference) = best_of(
+        2000,
+        |k| {
             for s in 0..ring.len() {
-                black_box(ring.echo(&map, poses[k], s, &mut rng));
+                black_box(ring.echo(&map, poses[k % poses.len()], s, &mut rng));
             }
-        })
-    });
-    group.finish();
+        },
+        |k| {
+            for s in 0..ring.len() {
+                black_box(ring.echo_per_ray(&map, poses[k % poses.len()], s, &mut rng2));
+            }
+        },
+    );
+    println!();
+    println!("| sonar | cycles/s | reference, cycles/s | speed-up |");
+    println!("|---|---|---|---|");
+    println!(
+        "| lab, ring of {} | {:.0} | {:.0} | {:.2} |",
+        ring.len(),
+        1.0 / ring_s,
+        1.0 / reference,
+        reference / ring_s
+    );
 }
-
-criterion_group!(benches, scans, sonar_ring);
-criterion_main!(benches);

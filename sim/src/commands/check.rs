@@ -437,7 +437,9 @@ pub fn main(args: CheckArgs) -> Result<(), super::CommandError> {
         runs.len() as u64,
         "check [{bar:30}] {pos}/{len} runs {elapsed_precise} (ETA {eta})",
     );
-    let results: Vec<(usize, Option<u64>, Result<(CheckReport, f64), String>)> = runs
+    // Each run: its scenario file's number, the seed it ran with, and its report or error.
+    type Outcome = (usize, Option<u64>, Result<(CheckReport, f64), String>);
+    let results: Vec<Outcome> = runs
         .par_iter()
         .map(|&(f, seed)| {
             let outcome = check_file(&files[f], seed);

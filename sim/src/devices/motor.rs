@@ -82,6 +82,8 @@ pub struct Motor {
     edges: u32,
     /// Edges seen since the start, for ground truth.
     total_edges: u64,
+    /// The last `exp(-span / time constant)` computed, by span: ticks are all one length.
+    decay: (f64, f64),
 }
 
 impl Motor {
@@ -93,6 +95,7 @@ impl Motor {
             angle_counts: 0.0,
             edges: 0,
             total_edges: 0,
+            decay: (0.0, 1.0),
         }
     }
 
@@ -151,7 +154,10 @@ impl Motor {
                 f64::INFINITY
             };
             let span = remaining.min(stop_after);
-            let decay = (-b * span).exp();
+            if span != self.decay.0 {
+                self.decay = (span, (-b * span).exp());
+            }
+            let decay = self.decay.1;
             rotation += omega_ss * span + (w0 - omega_ss) * (1.0 - decay) / b;
             t += span;
             self.omega = if span == stop_after {

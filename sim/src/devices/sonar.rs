@@ -13,7 +13,7 @@
 
 use crate::config::robot_file::SonarDescription;
 use crate::rng::SimRng;
-use crate::world::WorldMap;
+use crate::world::{Hit, WorldMap};
 use rand_distr::{Distribution, StandardNormal};
 use robot::Pose2;
 
@@ -27,6 +27,9 @@ pub struct SonarModel {
     transducers: Vec<Pose2>,
     /// Directions of the fan of rays relative to a transducer's axis, radians.
     fan: Vec<f64>,
+    /// The fan's rays from the axis outwards: the nearest echo, which limits how far the
+    /// others are followed, is most often on the axis.
+    centre_first: Vec<usize>,
     min_range: f64,
     max_range: f64,
     /// Cosine of the critical angle of incidence.
@@ -49,7 +52,7 @@ impl SonarModel {
             .collect();
         let half = desc.cone_deg.get().to_radians() / 2.0;
         let rays = usize::from(desc.rays.max(1));
-        let fan = (0..rays)
+        let fan: Vec<f64> = (0..rays)
             .map(|i| {
                 if rays == 1 {
                     0.0
@@ -58,8 +61,11 @@ impl SonarModel {
                 }
             })
             .collect();
+        let mut centre_first: Vec<usize> = (0..fan.len()).collect();
+        centre_first.sort_by(|&a, &b| f64::abs(fan[a]).total_cmp(&f64::abs(fan[b])));
         SonarModel {
             transducers,
+            centre_first,
             fan,
             min_range: desc.min_range_m.get(),
             max_range: desc.max_range_m.get(),
@@ -95,15 +101,56 @@ impl SonarModel {
 
     /// The distance transducer `k` hears with the base at `base`, or `None` for no echo.
     pub fn echo(&self, map: &WorldMap, base: Pose2, k: usize, rng: &mut SimRng) -> Option<f64> {
-        let sensor = base.compose(self.transducers.get(k)?);
-        let nearest = self
-            .fan
+        let (origin, dirs) = self.rays(base, k)?;
+        // The fan's first legs in one sweep, then each ray followed only as far as the nearest
+        // echo so far: a longer path cannot bring a nearer one.
+        let mut first = Vec::with_capacity(dirs.len());
+        map.cast_fan(origin, &dirs, self.max_range, &mut first);
+        let mut nearest = f64::INFINITY;
+        for &k in &self.centre_first {
+            if let Some(r) = self.follow(map, origin, dirs[k], first[k], nearest) {
+                nearest = nearest.min(r);
+            }
+        }
+        self.heard(nearest, rng)
+    }
+
+    /// [`SonarModel::echo`] with each ray of the cone cast on its own and followed to its end:
+    /// the reference the sweep and the early stop are tested and benchmarked against.
+    pub fn echo_per_ray(
+        &self,
+        map: &WorldMap,
+        base: Pose2,
+        k: usize,
+        rng: &mut SimRng,
+    ) -> Option<f64> {
+        let (origin, dirs) = self.rays(base, k)?;
+        let nearest = dirs
             .iter()
-            .filter_map(|offset| {
-                let a = sensor.theta + offset;
-                self.follow(map, [sensor.x, sensor.y], [a.cos(), a.sin()])
+            .filter_map(|&dir| {
+                let first = map.cast(origin, dir, self.max_range);
+                self.follow(map, origin, dir, first, f64::INFINITY)
             })
             .fold(f64::INFINITY, f64::min);
+        self.heard(nearest, rng)
+    }
+
+    /// Transducer `k`'s origin and its cone's rays with the base at `base`.
+    fn rays(&self, base: Pose2, k: usize) -> Option<([f64; 3], Vec<[f64; 3]>)> {
+        let sensor = base.compose(self.transducers.get(k)?);
+        let dirs = self
+            .fan
+            .iter()
+            .map(|offset| {
+                let (s, c) = (sensor.theta + offset).sin_cos();
+                [c, s, 0.0]
+            })
+            .collect();
+        Some(([sensor.x, sensor.y, self.height], dirs))
+    }
+
+    /// What the receiver reports for the nearest path heard: the distance with its noise.
+    fn heard(&self, nearest: f64, rng: &mut SimRng) -> Option<f64> {
         if !nearest.is_finite() {
             return None;
         }
@@ -111,12 +158,26 @@ impl SonarModel {
         Some((nearest + self.sigma * noise).max(self.min_range))
     }
 
-    /// Follows one ray of the burst; the one-way path length of the echo it brings back.
-    fn follow(&self, map: &WorldMap, origin: [f64; 2], dir: [f64; 2]) -> Option<f64> {
-        let (mut o, mut d) = (origin, dir);
+    /// Follows one ray of the burst from `origin` along `dir`, `first` being what its first leg
+    /// meets; the one-way path length of the echo it brings back, if it is heard and not longer
+    /// than `limit`.
+    fn follow(
+        &self,
+        map: &WorldMap,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        first: Option<Hit>,
+        limit: f64,
+    ) -> Option<f64> {
+        let (mut o, mut d) = ([origin[0], origin[1]], [dir[0], dir[1]]);
         let mut travelled = 0.0;
-        for _ in 0..=MAX_BOUNCES {
-            let hit = map.cast_level(o, self.height, d, self.max_range - travelled)?;
+        let reach = self.max_range.min(limit);
+        for leg in 0..=MAX_BOUNCES {
+            let hit = if leg == 0 {
+                first.filter(|h| h.distance <= reach)?
+            } else {
+                map.cast_level(o, self.height, d, reach - travelled)?
+            };
             travelled += hit.distance;
             let n = [hit.normal[0], hit.normal[1]];
             let cos_incidence = -(d[0] * n[0] + d[1] * n[1]);
@@ -219,5 +280,36 @@ mod tests {
             .echo(&map(walls), turned, 0, &mut crate::rng::substream(1, 0))
             .unwrap();
         assert!(d > 6.0 && d < 7.0, "{d}");
+    }
+
+    #[test]
+    fn the_sweep_and_the_early_stop_hear_what_every_ray_alone_hears() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let robot =
+            crate::config::RobotDescription::load(root.join("scenarios/robots/pioneer-3dx.toml"))
+                .unwrap();
+        let ring = SonarModel::new(robot.sonar.as_ref().unwrap());
+        for world in ["lab", "glass-door", "sonar-wall", "black-door-corridor"] {
+            let desc =
+                WorldDescription::load(root.join("worlds").join(format!("{world}.toml"))).unwrap();
+            let map = WorldMap::new(&desc);
+            let (min, max) = desc.bounds();
+            let mut heard = 0;
+            for i in 0..400u32 {
+                let f = |k: u32, n: u32| f64::from(k % n) / f64::from(n);
+                let base = Pose2::new(
+                    min[0] + (max[0] - min[0]) * f(i * 7, 23),
+                    min[1] + (max[1] - min[1]) * f(i * 11, 19),
+                    6.283 * f(i * 13, 29),
+                );
+                let k = (i % 16) as usize;
+                let fast = ring.echo(&map, base, k, &mut crate::rng::substream(1, u64::from(i)));
+                let reference =
+                    ring.echo_per_ray(&map, base, k, &mut crate::rng::substream(1, u64::from(i)));
+                assert_eq!(fast, reference, "{world}, {base:?}, transducer {k}");
+                heard += usize::from(fast.is_some());
+            }
+            assert!(heard > 100, "{world}: {heard} of 400 heard");
+        }
     }
 }

@@ -133,10 +133,25 @@ fn render(record: &RunRecord, world: &WorldDescription, map: &WorldMap) -> Strin
     let mut beyond = String::new();
     let mut beyond_count = 0usize;
     let mut dots = |points: &mut dyn Iterator<Item = [f64; 3]>| {
+        // Points on a half-pixel grid, each drawn once: a 2-pixel dot hides any finer place, and
+        // a picture of a long run then costs what its area does, not what its scans do.
         let mut d = String::new();
+        let mut drawn = HalfPixels::new(&plan);
         for p in points {
             if plan.contains(p[0], p[1]) {
-                let _ = write!(d, "M{:.1} {:.1}h0", plan.x(p[0]), plan.y(p[1]));
+                // In the frame: both half-pixel numbers are positive, so adding a half and
+                // truncating rounds.
+                let (x, y) = (
+                    (plan.x(p[0]) * 2.0 + 0.5) as i64,
+                    (plan.y(p[1]) * 2.0 + 0.5) as i64,
+                );
+                if drawn.insert(x, y) {
+                    d.push('M');
+                    push_halves(&mut d, x);
+                    d.push(' ');
+                    push_halves(&mut d, y);
+                    d.push_str("h0");
+                }
             } else {
                 beyond_count += 1;
                 let (x, y) = plan.clamped(p[0], p[1]);
@@ -382,6 +397,56 @@ fn classify_points(record: &RunRecord, map: &WorldMap) -> ScanPoints {
         }
     }
     out
+}
+
+/// Which half-pixel places of a plan's frame were drawn.
+struct HalfPixels {
+    min: [i64; 2],
+    columns: i64,
+    rows: i64,
+    bits: Vec<u64>,
+}
+
+impl HalfPixels {
+    fn new(plan: &Plan) -> Self {
+        let min = [
+            (plan.origin[0] * 2.0).floor() as i64 - 1,
+            (plan.origin[1] * 2.0).floor() as i64 - 1,
+        ];
+        let columns = (plan.width() * 2.0).ceil() as i64 + 4;
+        let rows = ((plan.max[1] - plan.min[1]) * plan.scale * 2.0).ceil() as i64 + 4;
+        let words = usize::try_from(columns * rows / 64 + 1).unwrap_or(0);
+        HalfPixels {
+            min,
+            columns,
+            rows,
+            bits: vec![0; words],
+        }
+    }
+
+    /// Marks the place; whether it was new (a place outside the frame always is).
+    fn insert(&mut self, x: i64, y: i64) -> bool {
+        let (c, r) = (x - self.min[0], y - self.min[1]);
+        if !(0..self.columns).contains(&c) || !(0..self.rows).contains(&r) {
+            return true;
+        }
+        let k = (r * self.columns + c) as usize;
+        let (word, bit) = (k / 64, 1u64 << (k % 64));
+        let new = self.bits[word] & bit == 0;
+        self.bits[word] |= bit;
+        new
+    }
+}
+
+/// Writes `halves / 2` with one decimal only when it is not whole ("12", "12.5").
+fn push_halves(s: &mut String, halves: i64) {
+    if halves < 0 {
+        s.push('-');
+    }
+    let _ = write!(s, "{}", halves.unsigned_abs() / 2);
+    if halves % 2 != 0 {
+        s.push_str(".5");
+    }
 }
 
 /// The SVG path data through `points` (already in pixels), closed back to the first if

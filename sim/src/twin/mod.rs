@@ -12,6 +12,7 @@
 //! tick by tick, then the body moves once. See [`systems`] for the order.
 
 pub mod components;
+pub mod fleet;
 pub mod sim_robot;
 pub mod systems;
 

@@ -139,7 +139,7 @@ impl Cap {
 }
 
 /// Tolerance on heights when deciding whether a ray passes a face, metres.
-const Z_EPS: f64 = 1e-9;
+pub(super) const Z_EPS: f64 = 1e-9;
 
 /// Static world geometry with its materials.
 #[derive(Clone)]
@@ -245,72 +245,109 @@ impl WorldMap {
 
     /// The first surface along the ray from `origin` in the unit direction `dir`, within `max`
     /// metres.
+    ///
+    /// Of faces met at the same distance, the one listed first wins, so [`WorldMap::cast_fan`]
+    /// answers exactly the same.
     pub fn cast(&self, origin: [f64; 3], dir: [f64; 3], max: f64) -> Option<Hit> {
-        let mut best: Option<Hit> = None;
-        let horizontal = (dir[0] * dir[0] + dir[1] * dir[1]).sqrt();
-        if horizontal > 1e-12 {
-            let h = [dir[0] / horizontal, dir[1] / horizontal];
-            let slab = Slab::new([origin[0], origin[1]], h);
-            let found = self.tree.find_best(
-                (max * horizontal) as f32,
+        let mut best = None;
+        if !is_vertical(dir) {
+            // In the plan the ray runs along `dir`'s horizontal part, so a crossing's parameter
+            // is the distance along the ray in 3D, with no normalising.
+            let slab = Slab::new([origin[0], origin[1]], [dir[0], dir[1]]);
+            // The traversal prunes with `f32` costs; the nearest face is kept here in `f64`,
+            // and each cost handed back is rounded up so no box that may hold it is pruned.
+            let nearest = core::cell::Cell::new((f64::INFINITY, u32::MAX));
+            self.tree.find_best(
+                round_up(max),
                 |node, best| slab.entry(node.mins(), node.maxs(), best),
-                |leaf, best| {
-                    let face = &self.faces[leaf as usize];
-                    let s = ray_segment([origin[0], origin[1]], h, face.a, face.b)?;
-                    let z = origin[2] + dir[2] * s / horizontal;
-                    (s <= f64::from(best) && z >= face.z[0] - Z_EPS && z <= face.z[1] + Z_EPS)
-                        .then_some(s as f32)
+                |leaf, _| {
+                    let t = self.face_crossing(leaf as usize, origin, dir, max)?;
+                    let (t_best, leaf_best) = nearest.get();
+                    if t < t_best || (t == t_best && leaf < leaf_best) {
+                        nearest.set((t, leaf));
+                    }
+                    Some(round_up(nearest.get().0))
                 },
             );
-            if let Some((leaf, s)) = found {
-                let face = &self.faces[leaf as usize];
-                let [nx, ny] = self.normals[leaf as usize];
-                let mut normal = [nx, ny, 0.0];
-                if normal[0] * dir[0] + normal[1] * dir[1] > 0.0 {
-                    normal = [-normal[0], -normal[1], 0.0];
-                }
-                best = Some(Hit {
-                    distance: f64::from(s) / horizontal,
-                    surface: Surface::Face(leaf as usize),
-                    material: face.material,
+            let (t, leaf) = nearest.get();
+            if leaf != u32::MAX {
+                best = Some(self.face_hit(leaf as usize, t, dir));
+            }
+        }
+        self.cast_planes(origin, dir, max, &mut best);
+        best
+    }
+
+    /// How far along the ray from `origin` in the unit direction `dir` it crosses face `i`
+    /// between the face's bottom and top, within `max` metres.
+    #[inline]
+    pub(super) fn face_crossing(
+        &self,
+        i: usize,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        max: f64,
+    ) -> Option<f64> {
+        let face = &self.faces[i];
+        let t = ray_segment([origin[0], origin[1]], [dir[0], dir[1]], face.a, face.b)?;
+        let z = origin[2] + dir[2] * t;
+        (t <= max && z >= face.z[0] - Z_EPS && z <= face.z[1] + Z_EPS).then_some(t)
+    }
+
+    /// The hit on face `i`, `t` metres along `dir`.
+    #[inline]
+    pub(super) fn face_hit(&self, i: usize, t: f64, dir: [f64; 3]) -> Hit {
+        let [nx, ny] = self.normals[i];
+        let mut normal = [nx, ny, 0.0];
+        if normal[0] * dir[0] + normal[1] * dir[1] > 0.0 {
+            normal = [-normal[0], -normal[1], 0.0];
+        }
+        Hit {
+            distance: t,
+            surface: Surface::Face(i),
+            material: self.faces[i].material,
+            normal,
+        }
+    }
+
+    /// Replaces `best` by the floor, the ceiling or a cap when a rising or falling ray meets
+    /// one nearer.
+    pub(super) fn cast_planes(
+        &self,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        max: f64,
+        best: &mut Option<Hit>,
+    ) {
+        if dir[2] == 0.0 {
+            return;
+        }
+        let normal = [0.0, 0.0, if dir[2] < 0.0 { 1.0 } else { -1.0 }];
+        let (plane, height) = if dir[2] < 0.0 {
+            (Surface::Floor, 0.0)
+        } else {
+            (Surface::Ceiling, self.ceiling)
+        };
+        let nearer = |t: f64, surface: Surface, material: Material, best: &mut Option<Hit>| {
+            if t > 0.0 && best.is_none_or(|b| t < b.distance) && t < max {
+                *best = Some(Hit {
+                    distance: t,
+                    surface,
+                    material,
                     normal,
                 });
             }
-        }
-        if dir[2] != 0.0 {
-            let normal = [0.0, 0.0, if dir[2] < 0.0 { 1.0 } else { -1.0 }];
-            let (plane, height) = if dir[2] < 0.0 {
-                (Surface::Floor, 0.0)
-            } else {
-                (Surface::Ceiling, self.ceiling)
-            };
-            let nearer = |t: f64, surface: Surface, material: Material, best: &mut Option<Hit>| {
-                if t > 0.0 && best.is_none_or(|b| t < b.distance) && t < max {
-                    *best = Some(Hit {
-                        distance: t,
-                        surface,
-                        material,
-                        normal,
-                    });
-                }
-            };
-            nearer(
-                (height - origin[2]) / dir[2],
-                plane,
-                Material::Matte,
-                &mut best,
-            );
-            for (i, cap) in self.caps.iter().enumerate() {
-                let t = (cap.z - origin[2]) / dir[2];
-                if t > 0.0 && best.is_none_or(|b| t < b.distance) {
-                    let p = [origin[0] + dir[0] * t, origin[1] + dir[1] * t];
-                    if inside(&cap.polygon, p) {
-                        nearer(t, Surface::Cap(i), cap.material, &mut best);
-                    }
+        };
+        nearer((height - origin[2]) / dir[2], plane, Material::Matte, best);
+        for (i, cap) in self.caps.iter().enumerate() {
+            let t = (cap.z - origin[2]) / dir[2];
+            if t > 0.0 && best.is_none_or(|b| t < b.distance) {
+                let p = [origin[0] + dir[0] * t, origin[1] + dir[1] * t];
+                if inside(&cap.polygon, p) {
+                    nearer(t, Surface::Cap(i), cap.material, best);
                 }
             }
         }
-        best
     }
 
     /// The first surface along a horizontal ray at height `z`.
@@ -343,6 +380,19 @@ impl WorldMap {
     }
 }
 
+/// Whether `dir` is (too near) vertical to cross a vertical face.
+#[inline]
+pub(super) fn is_vertical(dir: [f64; 3]) -> bool {
+    dir[0] * dir[0] + dir[1] * dir[1] <= 1e-24
+}
+
+/// The smallest `f32` not below `x`.
+#[inline]
+fn round_up(x: f64) -> f32 {
+    let f = x as f32;
+    if f64::from(f) < x { f.next_up() } else { f }
+}
+
 /// A ray in the plane prepared for slab tests against bounding boxes.
 struct Slab {
     origin: [f32; 2],
@@ -351,12 +401,12 @@ struct Slab {
 
 impl Slab {
     fn new(origin: [f64; 2], dir: [f64; 2]) -> Self {
+        // In f64 first: a steep ray's horizontal part may be tiny.
         let inv = |d: f64| {
-            let d = d as f32;
-            if d.abs() < f32::EPSILON {
-                f32::EPSILON.recip().copysign(d)
+            if d.abs() < 1e-30 {
+                1e30f32.copysign(d as f32)
             } else {
-                d.recip()
+                d.recip() as f32
             }
         };
         Slab {
@@ -387,19 +437,23 @@ impl Slab {
     }
 }
 
-/// Where the ray from `o` along the unit `d` crosses the segment `a`–`b`, as a distance along
-/// the ray, or `None` when it misses it or runs parallel to it.
+/// Where the ray `o + t d` crosses the segment `a`–`b`, as the parameter `t`, or `None` when it
+/// misses it or runs parallel to it. One division, for a crossing only.
 #[inline]
-fn ray_segment(o: [f64; 2], d: [f64; 2], a: [f64; 2], b: [f64; 2]) -> Option<f64> {
+pub(super) fn ray_segment(o: [f64; 2], d: [f64; 2], a: [f64; 2], b: [f64; 2]) -> Option<f64> {
     let e = [b[0] - a[0], b[1] - a[1]];
     let denom = d[0] * e[1] - d[1] * e[0];
-    if denom.abs() < 1e-15 {
+    if denom.abs() <= 1e-15 * (d[0].abs() + d[1].abs()) {
         return None;
     }
     let w = [a[0] - o[0], a[1] - o[1]];
-    let t = (w[0] * e[1] - w[1] * e[0]) / denom;
-    let u = (w[0] * d[1] - w[1] * d[0]) / denom;
-    (t >= 0.0 && (0.0..=1.0).contains(&u)).then_some(t)
+    let (mut nt, mut nu) = (w[0] * e[1] - w[1] * e[0], w[0] * d[1] - w[1] * d[0]);
+    let den = denom.abs();
+    if denom < 0.0 {
+        (nt, nu) = (-nt, -nu);
+    }
+    // t = nt / den ≥ 0 and the crossing's place on the segment, nu / den, in [0, 1].
+    (nt >= 0.0 && nu >= 0.0 && nu <= den).then(|| nt / den)
 }
 
 fn vector(p: [f64; 2]) -> Vector {

@@ -3,9 +3,11 @@
 //! checks and the pictures, and the scores of a 3D model against the true surfaces ([`score`]).
 
 pub mod clutter;
+mod fan;
 mod index;
 mod map;
 pub mod score;
 
+pub use fan::{FAN_MAX_FACES, PlaneFan};
 pub use index::SurfaceId;
 pub use map::{Cap, Face, Hit, PointKind, Surface, WorldMap, point_segment_distance};

@@ -20,7 +20,7 @@
 
 use crate::config::{Material, Optics};
 use crate::rng::SimRng;
-use crate::world::WorldMap;
+use crate::world::{Hit, WorldMap};
 use parry2d::math::{Pose, Vector};
 use parry2d::query::{Ray, RayCast};
 use parry2d::shape::Ball;
@@ -34,6 +34,8 @@ impl Optics {
             cos_grazing: self.grazing.cos(),
             cos_glass_return: self.glass_return.cos(),
             cos_metal_return: self.metal_return.cos(),
+            cos_black_full: self.black_full.cos(),
+            cos_black_lost: self.black_lost.cos(),
         }
     }
 }
@@ -46,6 +48,8 @@ pub struct PreparedOptics {
     cos_grazing: f64,
     cos_glass_return: f64,
     cos_metal_return: f64,
+    cos_black_full: f64,
+    cos_black_lost: f64,
 }
 
 /// A round obstacle that moves: the robot's own body, a vertical cylinder from the floor, which
@@ -89,91 +93,147 @@ pub fn trace(
     max_range: f64,
     rng: &mut SimRng,
 ) -> Echo {
-    trace_prepared(map, &optics.prepared(), body, origin, dir, max_range, rng)
+    Pulses::with_optics(map, optics, body, max_range).trace(origin, dir, rng)
 }
 
-/// [`trace`] with the optics prepared once for many pulses.
-pub fn trace_prepared(
-    map: &WorldMap,
-    prepared: &PreparedOptics,
+/// What is fixed for all the pulses of a scan: the world with its optics prepared, the robot's
+/// body and the range.
+#[derive(Copy, Clone)]
+pub struct Pulses<'a> {
+    map: &'a WorldMap,
+    prepared: PreparedOptics,
     body: Option<Disc>,
-    origin: [f64; 3],
-    dir: [f64; 3],
     max_range: f64,
-    rng: &mut SimRng,
-) -> Echo {
-    let optics = &prepared.optics;
-    let mut travelled = 0.0;
-    let (mut o, mut d) = (origin, dir);
-    for leg in 0..=optics.max_bounces {
-        let remaining = max_range - travelled;
-        if remaining <= 0.0 {
-            return Echo::Lost;
-        }
-        let Some(contact) = first_contact(map, if leg == 0 { None } else { body }, o, d, remaining)
-        else {
-            return Echo::Lost;
-        };
-        travelled += contact.distance;
-        let n = contact.normal;
-        let along = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
-        // The cosine of the incidence: larger is nearer the normal.
-        let cos_in = (-along).clamp(-1.0, 1.0);
-        if cos_in <= prepared.cos_grazing {
-            return Echo::Lost;
-        }
-        let hit = [0, 1, 2].map(|k| o[k] + d[k] * contact.distance);
-        match contact.material {
-            Material::Matte => return Echo::Range(travelled),
-            Material::Black => {
-                let incidence = cos_in.acos();
-                let span = optics.black_lost - optics.black_full;
-                let p = if span > 0.0 {
-                    ((optics.black_lost - incidence) / span).clamp(0.0, 1.0)
-                } else {
-                    f64::from(u8::from(incidence < optics.black_full))
-                };
-                return if rng.random_bool(p) {
-                    Echo::Range(travelled)
-                } else {
-                    Echo::Lost
-                };
-            }
-            Material::Glass if cos_in > prepared.cos_glass_return => {
-                return Echo::Range(travelled);
-            }
-            Material::Glass if rng.random_bool(optics.glass_transparent) => {
-                // Through the pane: go on from just beyond it.
-                o = [0, 1, 2].map(|k| hit[k] + d[k] * NUDGE);
-            }
-            Material::Metal if cos_in > prepared.cos_metal_return => {
-                return Echo::Range(travelled);
-            }
-            Material::Glass | Material::Metal => {
-                // Specular reflection, leaving from just in front of the surface.
-                d = [0, 1, 2].map(|k| d[k] - 2.0 * along * n[k]);
-                o = [0, 1, 2].map(|k| hit[k] + n[k] * NUDGE);
-            }
+}
+
+impl<'a> Pulses<'a> {
+    /// Pulses in `map` with its own optics.
+    pub fn new(map: &'a WorldMap, body: Option<Disc>, max_range: f64) -> Self {
+        Self::with_optics(map, map.optics(), body, max_range)
+    }
+
+    /// Pulses in `map` answered by `optics`.
+    pub fn with_optics(
+        map: &'a WorldMap,
+        optics: &Optics,
+        body: Option<Disc>,
+        max_range: f64,
+    ) -> Self {
+        Pulses {
+            map,
+            prepared: optics.prepared(),
+            body,
+            max_range,
         }
     }
-    Echo::Lost
+
+    /// Follows one pulse from `origin` along the unit direction `dir`.
+    pub fn trace(&self, origin: [f64; 3], dir: [f64; 3], rng: &mut SimRng) -> Echo {
+        let first = (self.max_range > 0.0)
+            .then(|| self.map.cast(origin, dir, self.max_range))
+            .flatten();
+        self.trace_from(origin, dir, first.as_ref(), rng)
+    }
+
+    /// [`Pulses::trace`] with the first surface the pulse meets already known (`first`, what
+    /// [`WorldMap::cast`] or [`WorldMap::cast_fan`] answer for the ray within the range): a
+    /// scan casts all its beams' first legs in one sweep.
+    #[inline]
+    pub fn trace_from(
+        &self,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        first: Option<&Hit>,
+        rng: &mut SimRng,
+    ) -> Echo {
+        let prepared = &self.prepared;
+        let optics = &prepared.optics;
+        let mut travelled = 0.0;
+        let (mut o, mut d) = (origin, dir);
+        for leg in 0..=optics.max_bounces {
+            let remaining = self.max_range - travelled;
+            if remaining <= 0.0 {
+                return Echo::Lost;
+            }
+            // The first leg starts inside the robot: only later legs can meet its body.
+            let contact = if leg == 0 {
+                first.map(|&hit| Contact::from(hit))
+            } else {
+                first_contact(self.map, self.body.as_ref(), o, d, remaining)
+            };
+            let Some(contact) = contact else {
+                return Echo::Lost;
+            };
+            travelled += contact.distance;
+            let n = contact.normal;
+            let along = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+            // The cosine of the incidence: larger is nearer the normal.
+            let cos_in = (-along).clamp(-1.0, 1.0);
+            if cos_in <= prepared.cos_grazing {
+                return Echo::Lost;
+            }
+            let hit = [0, 1, 2].map(|k| o[k] + d[k] * contact.distance);
+            match contact.material {
+                Material::Matte => return Echo::Range(travelled),
+                Material::Black => {
+                    let span = optics.black_lost - optics.black_full;
+                    let p = if cos_in >= prepared.cos_black_full {
+                        1.0 // within `black_full` of the normal
+                    } else if cos_in <= prepared.cos_black_lost {
+                        0.0
+                    } else if span > 0.0 {
+                        ((optics.black_lost - cos_in.acos()) / span).clamp(0.0, 1.0)
+                    } else {
+                        f64::from(u8::from(cos_in.acos() < optics.black_full))
+                    };
+                    return if rng.random_bool(p) {
+                        Echo::Range(travelled)
+                    } else {
+                        Echo::Lost
+                    };
+                }
+                Material::Glass if cos_in > prepared.cos_glass_return => {
+                    return Echo::Range(travelled);
+                }
+                Material::Glass if rng.random_bool(optics.glass_transparent) => {
+                    // Through the pane: go on from just beyond it.
+                    o = [0, 1, 2].map(|k| hit[k] + d[k] * NUDGE);
+                }
+                Material::Metal if cos_in > prepared.cos_metal_return => {
+                    return Echo::Range(travelled);
+                }
+                Material::Glass | Material::Metal => {
+                    // Specular reflection, leaving from just in front of the surface.
+                    d = [0, 1, 2].map(|k| d[k] - 2.0 * along * n[k]);
+                    o = [0, 1, 2].map(|k| hit[k] + n[k] * NUDGE);
+                }
+            }
+        }
+        Echo::Lost
+    }
 }
 
 /// How far a continued pulse starts from the surface it left, metres.
 const NUDGE: f64 = 1e-5;
 
+impl From<Hit> for Contact {
+    fn from(hit: Hit) -> Self {
+        Contact {
+            distance: hit.distance,
+            normal: hit.normal,
+            material: hit.material,
+        }
+    }
+}
+
 fn first_contact(
     map: &WorldMap,
-    body: Option<Disc>,
+    body: Option<&Disc>,
     origin: [f64; 3],
     dir: [f64; 3],
     max: f64,
 ) -> Option<Contact> {
-    let wall = map.cast(origin, dir, max).map(|hit| Contact {
-        distance: hit.distance,
-        normal: hit.normal,
-        material: hit.material,
-    });
+    let wall = map.cast(origin, dir, max).map(Contact::from);
     let Some(disc) = body else { return wall };
     let horizontal = (dir[0] * dir[0] + dir[1] * dir[1]).sqrt();
     if horizontal < 1e-12 {

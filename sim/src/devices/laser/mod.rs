@@ -23,7 +23,7 @@ pub mod outliers;
 use crate::config::Outliers;
 use crate::config::robot_file::LaserDescription;
 use crate::rng::SimRng;
-use crate::world::WorldMap;
+use crate::world::{PlaneFan, WorldMap};
 use beam::{Disc, Echo};
 use core::time::Duration;
 use rand_distr::{Distribution, StandardNormal};
@@ -141,8 +141,8 @@ pub struct LaserModel {
     timing: LaserTiming,
     /// Rate of its serial line, bits per second.
     baud: u32,
-    /// Sine and cosine of each beam's angle.
-    beam_trig: Vec<(f64, f64)>,
+    /// The beams' angles in the scan plane.
+    beams: PlaneFan,
 }
 
 impl LaserModel {
@@ -171,8 +171,13 @@ impl LaserModel {
                 desc.baud,
             ),
             baud: desc.baud,
-            beam_trig: angles.iter().map(|a| a.sin_cos()).collect(),
+            beams: PlaneFan::new(angles),
         }
+    }
+
+    /// The beams' angles in the scan plane.
+    pub fn beams(&self) -> &PlaneFan {
+        &self.beams
     }
 
     /// The laser's pose on the base.
@@ -207,6 +212,9 @@ impl LaserModel {
 
     /// Measures one scan from `frame`. `body` is the robot's own body, which reflected beams can
     /// meet.
+    ///
+    /// The beams' first legs are cast in one sweep of the world ([`WorldMap::cast_fan`]); the
+    /// result is [`LaserModel::scan_per_beam`]'s to the last bit.
     pub fn scan(
         &self,
         map: &WorldMap,
@@ -215,25 +223,57 @@ impl LaserModel {
         stamp: Stamp,
         rng: &mut SimRng,
     ) -> LaserScan {
-        let optics = map.optics().prepared();
-        let (forward, left) = frame.axes();
-        let ranges_mm = self
-            .beam_trig
+        let pulses = beam::Pulses::new(map, body, self.range_max_m);
+        let (mut dirs, mut first) = (Vec::new(), Vec::new());
+        let axes = frame.axes();
+        map.cast_plane_fan(
+            frame.origin,
+            axes,
+            &self.beams,
+            self.range_max_m,
+            &mut dirs,
+            &mut first,
+        );
+        let ranges_mm = dirs
             .iter()
-            .map(|&(sa, ca)| {
-                let dir = [0, 1, 2].map(|k| ca * forward[k] + sa * left[k]);
-                let echo = beam::trace_prepared(
-                    map,
-                    &optics,
-                    body,
-                    frame.origin,
-                    dir,
-                    self.range_max_m,
-                    rng,
-                );
+            .zip(&first)
+            .map(|(&dir, first)| {
+                let echo = pulses.trace_from(frame.origin, dir, first.as_ref(), rng);
                 self.reading_mm(echo, rng)
             })
             .collect();
+        self.telegram(stamp, ranges_mm)
+    }
+
+    /// [`LaserModel::scan`] cast beam by beam down the world's tree: the reference the sweep is
+    /// tested and benchmarked against.
+    pub fn scan_per_beam(
+        &self,
+        map: &WorldMap,
+        body: Option<Disc>,
+        frame: LaserFrame,
+        stamp: Stamp,
+        rng: &mut SimRng,
+    ) -> LaserScan {
+        let pulses = beam::Pulses::new(map, body, self.range_max_m);
+        let ranges_mm = self
+            .directions(frame)
+            .into_iter()
+            .map(|dir| {
+                let echo = pulses.trace(frame.origin, dir, rng);
+                self.reading_mm(echo, rng)
+            })
+            .collect();
+        self.telegram(stamp, ranges_mm)
+    }
+
+    /// The world direction of every beam from `frame`, first beam first.
+    pub fn directions(&self, frame: LaserFrame) -> Vec<[f64; 3]> {
+        let (forward, left) = frame.axes();
+        self.beams.directions(forward, left)
+    }
+
+    fn telegram(&self, stamp: Stamp, ranges_mm: Vec<u16>) -> LaserScan {
         LaserScan {
             stamp,
             angle_min: self.angle_min,
@@ -245,6 +285,7 @@ impl LaserModel {
     }
 
     /// What the receiver reports for an echo: noise, then perhaps an outlier, in millimetres.
+    #[inline]
     pub fn reading_mm(&self, echo: Echo, rng: &mut SimRng) -> u16 {
         let echo = match self.outliers.draw(echo, self.range_max_m, rng) {
             Some(outlier) => outlier,
@@ -260,7 +301,8 @@ impl LaserModel {
             Echo::Lost => self.range_max_mm,
             Echo::Range(r) => {
                 let valid_max = f64::from(self.range_max_mm.saturating_sub(1)) * 1e-3;
-                (r.clamp(0.0, valid_max) * 1000.0).round() as u16
+                // Rounded to the nearest millimetre (half up), without a call into libm.
+                (r.clamp(0.0, valid_max) * 1000.0 + 0.5) as u16
             }
         }
     }

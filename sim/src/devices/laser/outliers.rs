@@ -14,6 +14,7 @@ use rand::RngExt;
 
 impl Outliers {
     /// Replaces `echo` by an outlier with the configured probabilities; `None` keeps it.
+    #[inline]
     pub fn draw(&self, echo: Echo, range_max: f64, rng: &mut SimRng) -> Option<Echo> {
         if !self.any() {
             return None;

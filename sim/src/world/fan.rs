@@ -1,0 +1,355 @@
+//! Casting a fan of rays from one point: the 361 beams of a laser scan, the rays of a sonar cone.
+//!
+//! The rays share their origin, so instead of one tree descent per ray the faces are swept once:
+//! each face is seen from the origin under an angle, and only the rays inside that angle are
+//! tried against it, with the same exact crossing test [`WorldMap::cast`] uses. A ray keeps the
+//! nearest face it crosses (the first listed of equally near ones, as `cast` does), then meets
+//! the floor, the ceiling and the caps the same way, so the answer is `cast`'s for every ray, to
+//! the last bit. Angles are compared as *pseudo-angles* (a monotonic stand-in for the angle that
+//! needs no trigonometry), padded by about a nanoradian so a ray through a face's end is always
+//! tried and the crossing test decides.
+//!
+//! The sweep touches every face in range once per fan, where a tree descent touches a few per
+//! ray: it wins while the faces are fewer than about [`FAN_MAX_FACES`], and larger worlds keep
+//! the tree (`cargo bench --bench laser` measures both).
+
+use super::map::{Face, Hit, WorldMap, Z_EPS, is_vertical};
+
+/// Worlds with more faces than this cast each ray down the tree instead.
+pub const FAN_MAX_FACES: usize = 400;
+
+/// Padding of a face's angular interval, in pseudo-angle units (a nanoradian or two).
+const PAD: f64 = 1e-9;
+
+/// The rays' pseudo-angles counter-clockwise from the first, in [0, 4), or `None` when they do
+/// not turn counter-clockwise in order (or one is vertical): such fans are cast ray by ray.
+fn turns(dirs: &[[f64; 3]]) -> Option<(f64, Vec<f64>)> {
+    let first = dirs.first()?;
+    if is_vertical(*first) {
+        return None;
+    }
+    let p0 = pseudo_angle([first[0], first[1]]);
+    let mut rel = Vec::with_capacity(dirs.len());
+    let mut last = 0.0;
+    for d in dirs {
+        if is_vertical(*d) {
+            return None;
+        }
+        let r = if rel.is_empty() {
+            0.0
+        } else {
+            wrap(pseudo_angle([d[0], d[1]]) - p0)
+        };
+        if r < last || r > 4.0 - 4.0 * PAD {
+            return None;
+        }
+        last = r;
+        rel.push(r);
+    }
+    Some((p0, rel))
+}
+
+/// Rays in one plane from one point at fixed angles, as a laser sweeps them: ray `k` points along
+/// `cos a_k · forward + sin a_k · left` for the plane's axes, the angles increasing. What the
+/// sweep needs of the angles is computed once, not per scan.
+#[derive(Clone, Debug)]
+pub struct PlaneFan {
+    /// Sine and cosine of each ray's angle.
+    trig: Vec<(f64, f64)>,
+    /// Pseudo-angle of each ray counter-clockwise from the first in the plane, or `None` when
+    /// the angles do not increase within a turn.
+    turns: Option<Vec<f64>>,
+}
+
+impl PlaneFan {
+    /// The fan of rays at `angles` (radians, counter-clockwise from the forward axis).
+    pub fn new(angles: impl IntoIterator<Item = f64>) -> Self {
+        let trig: Vec<(f64, f64)> = angles.into_iter().map(f64::sin_cos).collect();
+        let pseudo: Vec<f64> = trig.iter().map(|&(s, c)| pseudo_angle([c, s])).collect();
+        let turns = pseudo.first().and_then(|&p0| {
+            let rel: Vec<f64> = pseudo
+                .iter()
+                .enumerate()
+                .map(|(k, &p)| if k == 0 { 0.0 } else { wrap(p - p0) })
+                .collect();
+            let ordered =
+                rel.windows(2).all(|w| w[0] <= w[1]) && rel.last() < Some(&(4.0 - 4.0 * PAD));
+            ordered.then_some(rel)
+        });
+        PlaneFan { trig, turns }
+    }
+
+    /// Number of rays.
+    pub fn len(&self) -> usize {
+        self.trig.len()
+    }
+
+    /// Whether the fan has no ray.
+    pub fn is_empty(&self) -> bool {
+        self.trig.is_empty()
+    }
+
+    /// Ray `k`'s direction for the plane's unit axes `forward` and `left`.
+    #[inline]
+    pub fn direction(&self, k: usize, forward: [f64; 3], left: [f64; 3]) -> [f64; 3] {
+        let (sa, ca) = self.trig[k];
+        [0, 1, 2].map(|i| ca * forward[i] + sa * left[i])
+    }
+
+    /// Every ray's direction, first ray first.
+    pub fn directions(&self, forward: [f64; 3], left: [f64; 3]) -> Vec<[f64; 3]> {
+        (0..self.len())
+            .map(|k| self.direction(k, forward, left))
+            .collect()
+    }
+}
+
+impl WorldMap {
+    /// The first surface along each ray from `origin` in the unit directions `dirs`, within
+    /// `max` metres, into `hits` (cleared first): exactly what [`WorldMap::cast`] answers for
+    /// each ray, in one sweep of the faces when the rays turn counter-clockwise in order.
+    pub fn cast_fan(
+        &self,
+        origin: [f64; 3],
+        dirs: &[[f64; 3]],
+        max: f64,
+        hits: &mut Vec<Option<Hit>>,
+    ) {
+        hits.clear();
+        let prepared = if self.faces().len() <= FAN_MAX_FACES {
+            turns(dirs)
+        } else {
+            None
+        };
+        let Some((p0, rel)) = prepared else {
+            hits.extend(dirs.iter().map(|&d| self.cast(origin, d, max)));
+            return;
+        };
+        let rays = Rays::new(dirs);
+        self.sweep(
+            origin,
+            &rays,
+            &rel,
+            |v| wrap(pseudo_angle(v) - p0),
+            max,
+            hits,
+        );
+    }
+
+    /// [`WorldMap::cast_fan`] for the rays of `fan` in the plane of the unit axes `forward` and
+    /// `left` (`left` horizontal, as a laser's scan plane tilts about it); their directions go
+    /// to `dirs` (cleared first).
+    pub fn cast_plane_fan(
+        &self,
+        origin: [f64; 3],
+        (forward, left): ([f64; 3], [f64; 3]),
+        fan: &PlaneFan,
+        max: f64,
+        dirs: &mut Vec<[f64; 3]>,
+        hits: &mut Vec<Option<Hit>>,
+    ) {
+        dirs.clear();
+        dirs.extend((0..fan.len()).map(|k| fan.direction(k, forward, left)));
+        // A plan vector v lies under ray k when (v·F, |F|² v·L) points at angle a_k, F being the
+        // forward axis's horizontal part: true when L is horizontal and square to F.
+        let f = [forward[0], forward[1]];
+        let f2 = f[0] * f[0] + f[1] * f[1];
+        let square = (f[0] * left[0] + f[1] * left[1]).abs() <= 1e-12 && left[2] == 0.0;
+        let (Some(rel), true, true) = (
+            &fan.turns,
+            square && f2 > 1e-12,
+            self.faces().len() <= FAN_MAX_FACES,
+        ) else {
+            self.cast_fan(origin, dirs, max, hits);
+            return;
+        };
+        hits.clear();
+        let rays = Rays::new(dirs);
+        let p0 = pseudo_angle([fan.trig[0].1, fan.trig[0].0]);
+        let in_plane = |v: [f64; 2]| {
+            let q = [
+                v[0] * f[0] + v[1] * f[1],
+                f2 * (v[0] * left[0] + v[1] * left[1]),
+            ];
+            wrap(pseudo_angle(q) - p0)
+        };
+        self.sweep(origin, &rays, rel, in_plane, max, hits);
+    }
+
+    /// The sweep: each face in reach tried against the rays whose pseudo-angle `rel` (from the
+    /// first ray, increasing) is within the face's, `angle_of` giving a plan vector's.
+    fn sweep(
+        &self,
+        origin: [f64; 3],
+        rays: &Rays,
+        rel: &[f64],
+        angle_of: impl Fn([f64; 2]) -> f64,
+        max: f64,
+        hits: &mut Vec<Option<Hit>>,
+    ) {
+        let n = rel.len();
+        let mut nearest = vec![(f64::INFINITY, u32::MAX); n];
+        let level = rays.z.iter().all(|&z| z == 0.0);
+        for (i, face) in self.faces().iter().enumerate() {
+            if level && !(origin[2] >= face.z[0] - Z_EPS && origin[2] <= face.z[1] + Z_EPS) {
+                continue; // a level fan passes over or under this face
+            }
+            let gap = |lo: f64, hi: f64, o: f64| (lo - o).max(o - hi).max(0.0);
+            let gx = gap(
+                face.a[0].min(face.b[0]),
+                face.a[0].max(face.b[0]),
+                origin[0],
+            );
+            let gy = gap(
+                face.a[1].min(face.b[1]),
+                face.a[1].max(face.b[1]),
+                origin[1],
+            );
+            if gx * gx + gy * gy > max * max {
+                continue; // out of reach
+            }
+            let a = [face.a[0] - origin[0], face.a[1] - origin[1]];
+            let b = [face.b[0] - origin[0], face.b[1] - origin[1]];
+            let cross = a[0] * b[1] - a[1] * b[0];
+            let scale = a[0] * a[0] + a[1] * a[1] + b[0] * b[0] + b[1] * b[1];
+            let mut sweep = |range: core::ops::Range<usize>| {
+                rays.cross(face, i as u32, origin, max, range, &mut nearest);
+            };
+            if cross.abs() <= 1e-12 * scale {
+                // The origin is on the face's line (or an end): any ray may cross it.
+                sweep(0..n);
+                continue;
+            }
+            // Counter-clockwise from `lo` to `hi` is the face's side of the origin.
+            let (lo, hi) = if cross > 0.0 {
+                (angle_of(a), angle_of(b))
+            } else {
+                (angle_of(b), angle_of(a))
+            };
+            let start = wrap(lo - PAD);
+            let end = start + wrap(hi - lo) + 2.0 * PAD;
+            let from = rel.partition_point(|&r| r < start);
+            sweep(from..rel.partition_point(|&r| r <= end));
+            if end > 4.0 {
+                sweep(0..rel.partition_point(|&r| r <= end - 4.0).min(from));
+            }
+        }
+        hits.extend(nearest.into_iter().enumerate().map(|(k, (t, i))| {
+            let dir = [rays.x[k], rays.y[k], rays.z[k]];
+            let best = (i != u32::MAX).then(|| self.face_hit(i as usize, t, dir));
+            if dir[2] == 0.0 {
+                return best; // a level ray meets no floor, ceiling or cap
+            }
+            let mut best = best;
+            self.cast_planes(origin, dir, max, &mut best);
+            best
+        }));
+    }
+}
+
+/// The rays' directions by component, for a tight loop over many rays.
+struct Rays {
+    x: Vec<f64>,
+    y: Vec<f64>,
+    z: Vec<f64>,
+}
+
+impl Rays {
+    fn new(dirs: &[[f64; 3]]) -> Self {
+        Rays {
+            x: dirs.iter().map(|d| d[0]).collect(),
+            y: dirs.iter().map(|d| d[1]).collect(),
+            z: dirs.iter().map(|d| d[2]).collect(),
+        }
+    }
+
+    /// Tries `face` (number `i`, tried after every lower number) against the rays in `range`,
+    /// keeping in `nearest` each ray's nearest crossing: the arithmetic of
+    /// [`WorldMap::face_crossing`] step for step, without branches, so it runs at the
+    /// processor's pace whichever rays cross.
+    #[inline]
+    fn cross(
+        &self,
+        face: &Face,
+        i: u32,
+        origin: [f64; 3],
+        max: f64,
+        range: core::ops::Range<usize>,
+        nearest: &mut [(f64, u32)],
+    ) {
+        let e = [face.b[0] - face.a[0], face.b[1] - face.a[1]];
+        let w = [face.a[0] - origin[0], face.a[1] - origin[1]];
+        let nt = w[0] * e[1] - w[1] * e[0];
+        let (bottom, top) = (face.z[0] - Z_EPS, face.z[1] + Z_EPS);
+        let (x, y, z) = (
+            &self.x[range.clone()],
+            &self.y[range.clone()],
+            &self.z[range.clone()],
+        );
+        for (k, best) in nearest[range].iter_mut().enumerate() {
+            let d = [x[k], y[k]];
+            let denom = d[0] * e[1] - d[1] * e[0];
+            let nu = w[0] * d[1] - w[1] * d[0];
+            let flip = denom < 0.0;
+            let den = denom.abs();
+            let (nt, nu) = if flip { (-nt, -nu) } else { (nt, nu) };
+            let t = nt / den;
+            let height = origin[2] + z[k] * t;
+            let crosses = (den > 1e-15 * (d[0].abs() + d[1].abs()))
+                & (nt >= 0.0)
+                & (nu >= 0.0)
+                & (nu <= den)
+                & (t <= max)
+                & (height >= bottom)
+                & (height <= top);
+            if crosses & (t < best.0) {
+                *best = (t, i);
+            }
+        }
+    }
+}
+
+/// A monotonic stand-in for the angle of `v` counter-clockwise from +x, in [0, 4): 1 per
+/// quarter turn, exact at the axes.
+#[inline]
+fn pseudo_angle(v: [f64; 2]) -> f64 {
+    let p = v[1] / (v[0].abs() + v[1].abs());
+    if v[0] < 0.0 {
+        2.0 - p
+    } else if v[1] < 0.0 {
+        4.0 + p
+    } else {
+        p
+    }
+}
+
+/// `x` brought into [0, 4) by whole turns (for `x` in [-4, 8)).
+#[inline]
+fn wrap(x: f64) -> f64 {
+    if x < 0.0 {
+        x + 4.0
+    } else if x >= 4.0 {
+        x - 4.0
+    } else {
+        x
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pseudo_angles_turn_with_the_angle() {
+        let turns: Vec<f64> = (0..720)
+            .map(|k| {
+                let a = f64::from(k) * std::f64::consts::PI / 360.0;
+                pseudo_angle([a.cos(), a.sin()])
+            })
+            .collect();
+        assert!(turns.windows(2).all(|w| w[0] < w[1]), "monotonic");
+        assert_eq!(turns[0], 0.0);
+        assert!((turns[180] - 1.0).abs() < 1e-15 && (turns[360] - 2.0).abs() < 1e-15);
+        assert!(turns[719] < 4.0);
+    }
+}
