@@ -1,14 +1,15 @@
 //! Issue 17: the laser's sweep (every beam's first leg cast in one pass over the faces) answers
 //! exactly what the reference — each beam cast down the world's tree — answers: the same
 //! surface, the same distance to 1e-9 m, and whole scans identical reading for reading with every
-//! material's optics and the outliers on, from random poses (level and tilted, any heading) in
-//! every bundled world.
+//! material's optics and the outliers on, among other robots' bodies, from random poses (level
+//! and tilted, any heading) in every bundled world.
 
 use rand::{RngExt, SeedableRng};
 use robot::{Pose2, Stamp};
 use sim::config::{Outliers, WorldDescription};
+use sim::devices::laser::beam::Disc;
 use sim::devices::laser::{LaserFrame, LaserModel};
-use sim::world::{FAN_MAX_FACES, Hit, WorldMap};
+use sim::world::{FAN_MAX_FACES, FanCast, Hit, WorldMap};
 
 /// Every world in `worlds/`, and the lab grown with boxes to just under the sweep's limit.
 fn worlds() -> Vec<(String, WorldDescription)> {
@@ -78,15 +79,15 @@ fn the_sweep_meets_what_each_beam_meets_alone() {
             let frame = random_frame(&world, &mut rng);
             let dirs = model.directions(frame);
             map.cast_fan(frame.origin, &dirs, 32.0, &mut fan);
-            let mut plane = (Vec::new(), Vec::new());
+            let mut plane = FanCast::default();
             let (beams, axes) = (model.beams(), frame.axes());
-            map.cast_plane_fan(frame.origin, axes, beams, 32.0, &mut plane.0, &mut plane.1);
+            map.cast_plane_fan(frame.origin, axes, beams, 32.0, &mut plane);
             for (k, (dir, fast)) in dirs.iter().zip(&fan).enumerate() {
                 let reference = map.cast(frame.origin, *dir, 32.0);
                 assert!(
-                    same(fast, &reference) && same(&plane.1[k], &reference),
+                    same(fast, &reference) && same(&plane.hit(&map, k), &reference),
                     "{name}, {frame:?}, beam {k}: sweep {fast:?}, in the plane {:?}, reference {reference:?}",
-                    plane.1[k]
+                    plane.hit(&map, k)
                 );
                 rays += 1;
                 hits += usize::from(fast.is_some());
@@ -145,7 +146,7 @@ fn whole_scans_equal_the_reference_reading_for_reading() {
             for k in 0..40u64 {
                 let frame = random_frame(&world, &mut rng);
                 // The robot's own body, which reflected beams can meet.
-                let body = Some(sim::devices::laser::beam::Disc {
+                let body = Some(Disc {
                     center: [frame.origin[0] - 0.1, frame.origin[1]],
                     radius: 0.25,
                     height: 0.5,
@@ -153,8 +154,20 @@ fn whole_scans_equal_the_reference_reading_for_reading() {
                 let seed = rng.random::<u64>();
                 let mut a = sim::rng::substream(seed, k);
                 let mut b = sim::rng::substream(seed, k);
-                let fast = model.scan(&map, body, frame, Stamp(k), &mut a);
-                let reference = model.scan_per_beam(&map, body, frame, Stamp(k), &mut b);
+                // Other robots around, which every leg meets too.
+                let others: Vec<Disc> = (0..rng.random_range(0..4))
+                    .map(|_| Disc {
+                        center: [
+                            frame.origin[0] + rng.random_range(-3.0..3.0),
+                            frame.origin[1] + rng.random_range(-3.0..3.0),
+                        ],
+                        radius: 0.25,
+                        height: 0.5,
+                    })
+                    .collect();
+                let fast = model.scan_among(&map, body, &others, frame, Stamp(k), &mut a);
+                let reference =
+                    model.scan_per_beam_among(&map, body, &others, frame, Stamp(k), &mut b);
                 assert_eq!(fast, reference, "{name}, {outliers}, {frame:?}");
                 assert_eq!(
                     a.random::<u64>(),
@@ -198,13 +211,13 @@ fn beams_through_the_ends_of_faces_match_too() {
                 };
                 let dirs = model.directions(frame);
                 map.cast_fan(frame.origin, &dirs, 32.0, &mut fan);
-                let mut plane = (Vec::new(), Vec::new());
+                let mut plane = FanCast::default();
                 let (beams, axes) = (model.beams(), frame.axes());
-                map.cast_plane_fan(frame.origin, axes, beams, 32.0, &mut plane.0, &mut plane.1);
-                assert_eq!(plane.0, dirs);
+                map.cast_plane_fan(frame.origin, axes, beams, 32.0, &mut plane);
+                assert_eq!(plane.dirs(), &dirs[..]);
                 for (j, d) in dirs.iter().enumerate() {
                     let reference = map.cast(frame.origin, *d, 32.0);
-                    for fast in [&fan[j], &plane.1[j]] {
+                    for fast in [&fan[j], &plane.hit(&map, j)] {
                         assert!(
                             same(fast, &reference),
                             "{frame:?}, beam {j}: {fast:?} vs {reference:?}"

@@ -1,6 +1,7 @@
 //! Issue 17: many robots stepping together. Each robot of a fleet is a whole twin (firmware,
 //! motors, physics, laser); the fleet steps them over the threads of a rayon pool, and gives the
-//! same bits on one thread or two, and each robot the same bits it gives alone with its seed.
+//! same bits on one thread or two; a fleet of one is the robot alone; each robot's laser sees
+//! the others.
 
 use robot::{Pose2, Stamp};
 use sim::Twin;
@@ -78,25 +79,72 @@ fn a_fleet_gives_the_same_bits_on_one_thread_or_two() {
 }
 
 #[test]
-fn each_robot_of_a_fleet_runs_as_it_would_alone() {
-    let fleet = run_fleet(2, 3, 200);
+fn a_fleet_of_one_runs_as_the_robot_alone() {
+    let fleet = run_fleet(2, 1, 300);
     let world = crate::common::world("lab");
     let robot = crate::common::robot("pioneer-3dx");
     let noise = NoiseSettings::defaults_for(&robot);
-    for (k, start) in lab_starts(3).into_iter().enumerate() {
-        let mut alone_world = world.clone();
-        alone_world.start = start;
-        let mut twin = Twin::new(&alone_world, &robot, &noise, Fleet::robot_seed(7, k)).unwrap();
-        twin.board_mut().deliver(Stamp::ZERO, command(k));
-        let mut scans = Vec::new();
-        for _ in 0..200 {
-            twin.step();
-            while let Some((_, scan)) = twin.pop_scan() {
-                scans.push((scan.stamp, scan.ranges_mm));
-            }
+    let mut alone_world = world.clone();
+    alone_world.start = lab_starts(1)[0];
+    let mut twin = Twin::new(&alone_world, &robot, &noise, Fleet::robot_seed(7, 0)).unwrap();
+    twin.board_mut().deliver(Stamp::ZERO, command(0));
+    let mut scans = Vec::new();
+    for _ in 0..300 {
+        twin.step();
+        while let Some((_, scan)) = twin.pop_scan() {
+            scans.push((scan.stamp, scan.ranges_mm));
         }
-        assert_eq!((scans, twin.true_pose()), fleet[k], "robot {k}");
     }
+    assert_eq!((scans, twin.true_pose()), fleet[0]);
+}
+
+#[test]
+fn robots_of_a_fleet_see_each_other() {
+    // Two robots face each other 3 m apart in a 20 m room: each one's middle beam meets the
+    // other's body, not the wall 10 m away.
+    let world = crate::common::big_room();
+    let robot = crate::common::robot("pioneer-3dx");
+    let starts = [
+        Pose2::new(0.0, 0.0, 0.0),
+        Pose2::new(3.0, 0.0, std::f64::consts::PI),
+    ];
+    let mut fleet = Fleet::new(&world, &robot, &NoiseSettings::NONE, 1, &starts).unwrap();
+    let middle: Vec<Mutex<Vec<u16>>> = (0..2).map(|_| Mutex::new(Vec::new())).collect();
+    for _ in 0..60 {
+        fleet.step(|k, twin| {
+            while let Some((_, scan)) = twin.pop_scan() {
+                middle[k]
+                    .lock()
+                    .unwrap()
+                    .push(scan.ranges_mm[scan.len() / 2]);
+            }
+        });
+    }
+    let mount = robot.laser_mount();
+    let body = fleet.robots()[1].body_disc();
+    // Robot 0's laser sits `mount.x` ahead of its axle; robot 1's body is a disc.
+    let expected = (body.center[0] - mount.x - body.radius) * 1000.0;
+    for (k, readings) in middle.iter().enumerate() {
+        let readings = readings.lock().unwrap();
+        assert!(!readings.is_empty(), "robot {k} scanned");
+        for &r in readings.iter() {
+            assert!(
+                (f64::from(r) - expected).abs() <= 2.0,
+                "robot {k} reads {r} mm ahead, the other robot's body is at {expected:.0} mm"
+            );
+        }
+    }
+    // Alone, the same robot sees the wall.
+    let mut alone = Fleet::new(&world, &robot, &NoiseSettings::NONE, 1, &starts[..1]).unwrap();
+    let far = Mutex::new(Vec::new());
+    for _ in 0..60 {
+        alone.step(|_, twin| {
+            while let Some((_, scan)) = twin.pop_scan() {
+                far.lock().unwrap().push(scan.ranges_mm[scan.len() / 2]);
+            }
+        });
+    }
+    assert!(far.into_inner().unwrap().iter().all(|&r| r > 9_000));
 }
 
 #[test]

@@ -14,7 +14,7 @@ use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
-#[path = "reference.rs"]
+#[path = "common/reference.rs"]
 mod reference;
 
 /// Simulated seconds per run.

@@ -17,7 +17,7 @@ use sim::world::WorldMap;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-#[path = "reference.rs"]
+#[path = "common/reference.rs"]
 mod reference;
 use reference::brute_force_scan_seconds;
 

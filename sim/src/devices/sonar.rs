@@ -300,7 +300,7 @@ mod tests {
                 let base = Pose2::new(
                     min[0] + (max[0] - min[0]) * f(i * 7, 23),
                     min[1] + (max[1] - min[1]) * f(i * 11, 19),
-                    6.283 * f(i * 13, 29),
+                    std::f64::consts::TAU * f(i * 13, 29),
                 );
                 let k = (i % 16) as usize;
                 let fast = ring.echo(&map, base, k, &mut crate::rng::substream(1, u64::from(i)));

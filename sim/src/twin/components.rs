@@ -43,6 +43,16 @@ pub struct Physics(pub PhysicsWorld);
 #[derive(Resource)]
 pub struct Map(pub WorldMap);
 
+/// Other robots' bodies in the same world (a [`super::fleet::Fleet`]'s), as their lasers see
+/// them: empty for a robot alone.
+#[derive(Resource, Default)]
+pub struct OtherRobots {
+    /// Every robot's body, this one's included.
+    pub all: std::sync::Arc<Vec<crate::devices::laser::beam::Disc>>,
+    /// This robot's place in `all`.
+    pub me: usize,
+}
+
 /// The base microcontroller board of a robot.
 #[derive(Component)]
 pub struct Board(pub BaseBoard);

@@ -3,18 +3,21 @@
 //! draws from the stream `robot/k` of the fleet's seed), all advanced one [`STEP`] at a time over
 //! the machine's cores.
 //!
-//! A robot's step reads nothing of another's, so the fleet gives the same bits on one thread or
-//! many, and each robot the same bits as it would alone with its seed.
+//! Each robot's laser sees the other robots' bodies as they stood at the start of the step (a
+//! snapshot taken before it, so a robot's step reads nothing another writes during it): the
+//! fleet gives the same bits on one thread or many.
 //!
-//! What the fleet does not do yet: robots do not see or bump into each other — each one's laser,
-//! sonar and body meet the world's walls only.
+//! What the fleet does not do yet: robots do not bump into each other (their bodies meet the
+//! world's walls only), and the sonar rings do not hear other robots.
 //!
 //! [`STEP`]: super::STEP
 
 use super::Twin;
 use crate::config::{ConfigError, NoiseSettings, RobotDescription, WorldDescription};
+use crate::devices::laser::beam::Disc;
 use rayon::prelude::*;
 use robot::Pose2;
+use std::sync::Arc;
 
 /// Up to `n` starting poses on a grid `spacing` metres wide over `world`, row by row from its
 /// lower-left corner, where a robot of `radius` metres stands clear of every wall by a margin of
@@ -98,11 +101,15 @@ impl Fleet {
 
     /// Advances every robot by one step, then lets `after` act on each (read its scans, send it
     /// commands), robots spread over the threads of the current rayon pool.
+    ///
+    /// Each robot's laser sees the others' bodies where they stood at the start of the step.
     pub fn step(&mut self, after: impl Fn(usize, &mut Twin) + Sync) {
+        let bodies: Arc<Vec<Disc>> = Arc::new(self.robots.iter().map(Twin::body_disc).collect());
         self.robots
             .par_iter_mut()
             .enumerate()
             .for_each(|(k, twin)| {
+                twin.set_other_robots(Arc::clone(&bodies), k);
                 twin.step();
                 after(k, twin);
             });

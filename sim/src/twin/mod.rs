@@ -135,6 +135,7 @@ impl Twin {
         world.insert_resource(SimClock::default());
         world.insert_resource(Physics(physics));
         world.insert_resource(Map(map));
+        world.insert_resource(OtherRobots::default());
         let robot = world
             .spawn((
                 Board(BaseBoard::power_on(robot_desc.drive.serial_baud)),
@@ -223,6 +224,23 @@ impl Twin {
         })
     }
 
+    /// The robot's body where it stands now, as other robots' lasers see it.
+    pub fn body_disc(&self) -> Disc {
+        let chassis = self.component::<Chassis>();
+        let (cx, cy) = self.true_pose().transform_point(chassis.center_x, 0.0);
+        Disc {
+            center: [cx, cy],
+            radius: chassis.radius,
+            height: chassis.height,
+        }
+    }
+
+    /// Every robot's body in the world (this one's at `me`, which it does not see), which this
+    /// robot's laser meets from now on (see [`fleet::Fleet`]).
+    pub fn set_other_robots(&mut self, all: std::sync::Arc<Vec<Disc>>, me: usize) {
+        *self.world.resource_mut::<OtherRobots>() = OtherRobots { all, me };
+    }
+
     /// Advances the world by one [`STEP`].
     pub fn step(&mut self) {
         self.schedule.run(&mut self.world);
@@ -294,10 +312,23 @@ impl Twin {
             radius: chassis.radius,
             height: chassis.height,
         };
+        let robots = self.world.resource::<OtherRobots>();
+        let others: Vec<Disc> = robots
+            .all
+            .iter()
+            .enumerate()
+            .filter(|&(j, _)| j != robots.me)
+            .map(|(_, d)| *d)
+            .collect();
         let mut rng = rng::substream(lidar.stream_seed, pending.index);
-        let mut scan = lidar
-            .model
-            .scan(map, Some(body), pending.frame, pending.stamp, &mut rng);
+        let mut scan = lidar.model.scan_among(
+            map,
+            Some(body),
+            &others,
+            pending.frame,
+            pending.stamp,
+            &mut rng,
+        );
         // The head's angles when the scan was measured, interpolated on its history.
         scan.head = self.head_angles_at(pending.stamp);
         Some((pending.delivery, scan))

@@ -21,6 +21,42 @@ pub const FAN_MAX_FACES: usize = 400;
 /// Padding of a face's angular interval, in pseudo-angle units (a nanoradian or two).
 const PAD: f64 = 1e-9;
 
+/// Buckets of a plane fan's index of pseudo-angles: a power of two, so a pseudo-angle's bucket
+/// is exact.
+const BUCKETS: usize = 1024;
+
+/// The rays' pseudo-angles counter-clockwise from the first, increasing in [0, 4), and for a
+/// fan used many times an index of them by bucket, so finding where a pseudo-angle falls costs a
+/// look-up instead of a binary search.
+#[derive(Clone, Debug)]
+struct Turns {
+    rel: Vec<f64>,
+    /// `buckets[j]`: how many rays lie below `j · 4 / BUCKETS`; empty for no index.
+    buckets: Vec<u32>,
+}
+
+impl Turns {
+    fn indexed(rel: Vec<f64>) -> Self {
+        let buckets = (0..=BUCKETS)
+            .map(|j| rel.partition_point(|&r| r < (j as f64) * 4.0 / BUCKETS as f64) as u32)
+            .collect();
+        Turns { rel, buckets }
+    }
+
+    /// How many rays lie below `x` (or at it, with `inclusive`).
+    #[inline]
+    fn count_below(&self, x: f64, inclusive: bool) -> usize {
+        let below = |r: &f64| if inclusive { *r <= x } else { *r < x };
+        if self.buckets.is_empty() {
+            return self.rel.partition_point(below);
+        }
+        // x · BUCKETS / 4 is exact (a power of two), so is its bucket.
+        let j = ((x * (BUCKETS as f64 / 4.0)).floor().max(0.0) as usize).min(BUCKETS - 1);
+        let (lo, hi) = (self.buckets[j] as usize, self.buckets[j + 1] as usize);
+        lo + self.rel[lo..hi].partition_point(below)
+    }
+}
+
 /// The rays' pseudo-angles counter-clockwise from the first, in [0, 4), or `None` when they do
 /// not turn counter-clockwise in order (or one is vertical): such fans are cast ray by ray.
 fn turns(dirs: &[[f64; 3]]) -> Option<(f64, Vec<f64>)> {
@@ -56,9 +92,9 @@ fn turns(dirs: &[[f64; 3]]) -> Option<(f64, Vec<f64>)> {
 pub struct PlaneFan {
     /// Sine and cosine of each ray's angle.
     trig: Vec<(f64, f64)>,
-    /// Pseudo-angle of each ray counter-clockwise from the first in the plane, or `None` when
-    /// the angles do not increase within a turn.
-    turns: Option<Vec<f64>>,
+    /// Pseudo-angle of each ray counter-clockwise from the first in the plane, indexed, or
+    /// `None` when the angles do not increase within a turn.
+    turns: Option<Turns>,
 }
 
 impl PlaneFan {
@@ -74,7 +110,7 @@ impl PlaneFan {
                 .collect();
             let ordered =
                 rel.windows(2).all(|w| w[0] <= w[1]) && rel.last() < Some(&(4.0 - 4.0 * PAD));
-            ordered.then_some(rel)
+            ordered.then(|| Turns::indexed(rel))
         });
         PlaneFan { trig, turns }
     }
@@ -126,45 +162,77 @@ impl WorldMap {
             return;
         };
         let rays = Rays::new(dirs);
+        let turns = Turns {
+            rel,
+            buckets: Vec::new(),
+        };
+        let mut nearest = Vec::new();
         self.sweep(
             origin,
             &rays,
-            &rel,
+            &turns,
             |v| wrap(pseudo_angle(v) - p0),
             max,
-            hits,
+            &mut nearest,
+        );
+        hits.extend(
+            dirs.iter()
+                .zip(nearest)
+                .map(|(&dir, near)| self.fan_hit(origin, dir, max, near)),
         );
     }
 
+    /// The hit of a ray whose nearest face the sweep found (`(distance, face)`, face `u32::MAX`
+    /// for none): that face, or the floor, ceiling or a cap when nearer.
+    #[inline]
+    pub(crate) fn fan_hit(
+        &self,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        max: f64,
+        (t, i): (f64, u32),
+    ) -> Option<Hit> {
+        let best = (i != u32::MAX).then(|| self.face_hit(i as usize, t, dir));
+        if dir[2] == 0.0 {
+            return best; // a level ray meets no floor, ceiling or cap
+        }
+        let mut best = best;
+        self.cast_planes(origin, dir, max, &mut best);
+        best
+    }
+
     /// [`WorldMap::cast_fan`] for the rays of `fan` in the plane of the unit axes `forward` and
-    /// `left` (`left` horizontal, as a laser's scan plane tilts about it); their directions go
-    /// to `dirs` (cleared first).
+    /// `left` (`left` horizontal, as a laser's scan plane tilts about it), into `out`: each
+    /// ray's direction and what it meets ([`FanCast::hit`]).
     pub fn cast_plane_fan(
         &self,
         origin: [f64; 3],
         (forward, left): ([f64; 3], [f64; 3]),
         fan: &PlaneFan,
         max: f64,
-        dirs: &mut Vec<[f64; 3]>,
-        hits: &mut Vec<Option<Hit>>,
+        out: &mut FanCast,
     ) {
-        dirs.clear();
-        dirs.extend((0..fan.len()).map(|k| fan.direction(k, forward, left)));
+        out.origin = origin;
+        out.max = max;
+        out.dirs.clear();
+        out.dirs
+            .extend((0..fan.len()).map(|k| fan.direction(k, forward, left)));
         // A plan vector v lies under ray k when (v·F, |F|² v·L) points at angle a_k, F being the
         // forward axis's horizontal part: true when L is horizontal and square to F.
         let f = [forward[0], forward[1]];
         let f2 = f[0] * f[0] + f[1] * f[1];
         let square = (f[0] * left[0] + f[1] * left[1]).abs() <= 1e-12 && left[2] == 0.0;
-        let (Some(rel), true, true) = (
+        let (Some(turns), true, true) = (
             &fan.turns,
             square && f2 > 1e-12,
             self.faces().len() <= FAN_MAX_FACES,
         ) else {
-            self.cast_fan(origin, dirs, max, hits);
+            out.nearest.clear();
+            out.nearest
+                .extend(out.dirs.iter().map(|&d| self.cast_faces(origin, d, max)));
             return;
         };
-        hits.clear();
-        let rays = Rays::new(dirs);
+        let rays = Rays::new(&out.dirs);
         let p0 = pseudo_angle([fan.trig[0].1, fan.trig[0].0]);
         let in_plane = |v: [f64; 2]| {
             let q = [
@@ -173,7 +241,7 @@ impl WorldMap {
             ];
             wrap(pseudo_angle(q) - p0)
         };
-        self.sweep(origin, &rays, rel, in_plane, max, hits);
+        self.sweep(origin, &rays, turns, in_plane, max, &mut out.nearest);
     }
 
     /// The sweep: each face in reach tried against the rays whose pseudo-angle `rel` (from the
@@ -182,13 +250,14 @@ impl WorldMap {
         &self,
         origin: [f64; 3],
         rays: &Rays,
-        rel: &[f64],
+        turns: &Turns,
         angle_of: impl Fn([f64; 2]) -> f64,
         max: f64,
-        hits: &mut Vec<Option<Hit>>,
+        nearest: &mut Vec<(f64, u32)>,
     ) {
-        let n = rel.len();
-        let mut nearest = vec![(f64::INFINITY, u32::MAX); n];
+        let n = turns.rel.len();
+        nearest.clear();
+        nearest.resize(n, (f64::INFINITY, u32::MAX));
         let level = rays.z.iter().all(|&z| z == 0.0);
         for (i, face) in self.faces().iter().enumerate() {
             if level && !(origin[2] >= face.z[0] - Z_EPS && origin[2] <= face.z[1] + Z_EPS) {
@@ -213,7 +282,7 @@ impl WorldMap {
             let cross = a[0] * b[1] - a[1] * b[0];
             let scale = a[0] * a[0] + a[1] * a[1] + b[0] * b[0] + b[1] * b[1];
             let mut sweep = |range: core::ops::Range<usize>| {
-                rays.cross(face, i as u32, origin, max, range, &mut nearest);
+                rays.cross(face, i as u32, origin, max, range, nearest);
             };
             if cross.abs() <= 1e-12 * scale {
                 // The origin is on the face's line (or an end): any ray may cross it.
@@ -228,22 +297,46 @@ impl WorldMap {
             };
             let start = wrap(lo - PAD);
             let end = start + wrap(hi - lo) + 2.0 * PAD;
-            let from = rel.partition_point(|&r| r < start);
-            sweep(from..rel.partition_point(|&r| r <= end));
+            let from = turns.count_below(start, false);
+            sweep(from..turns.count_below(end, true));
             if end > 4.0 {
-                sweep(0..rel.partition_point(|&r| r <= end - 4.0).min(from));
+                sweep(0..turns.count_below(end - 4.0, true).min(from));
             }
         }
-        hits.extend(nearest.into_iter().enumerate().map(|(k, (t, i))| {
-            let dir = [rays.x[k], rays.y[k], rays.z[k]];
-            let best = (i != u32::MAX).then(|| self.face_hit(i as usize, t, dir));
-            if dir[2] == 0.0 {
-                return best; // a level ray meets no floor, ceiling or cap
-            }
-            let mut best = best;
-            self.cast_planes(origin, dir, max, &mut best);
-            best
-        }));
+    }
+}
+
+/// A fan cast by [`WorldMap::cast_plane_fan`], kept to be read ray by ray (and its buffers
+/// reused from one scan to the next).
+#[derive(Clone, Debug, Default)]
+pub struct FanCast {
+    origin: [f64; 3],
+    max: f64,
+    dirs: Vec<[f64; 3]>,
+    /// Each ray's nearest face and its distance (`u32::MAX`: none).
+    nearest: Vec<(f64, u32)>,
+}
+
+impl FanCast {
+    /// Number of rays.
+    pub fn len(&self) -> usize {
+        self.dirs.len()
+    }
+
+    /// Whether the fan has no ray.
+    pub fn is_empty(&self) -> bool {
+        self.dirs.is_empty()
+    }
+
+    /// The rays' directions.
+    pub fn dirs(&self) -> &[[f64; 3]] {
+        &self.dirs
+    }
+
+    /// What ray `k` meets first: exactly [`WorldMap::cast`]'s answer.
+    #[inline]
+    pub fn hit(&self, map: &WorldMap, k: usize) -> Option<Hit> {
+        map.fan_hit(self.origin, self.dirs[k], self.max, self.nearest[k])
     }
 }
 

@@ -251,7 +251,12 @@ impl WorldMap {
     /// Of faces met at the same distance, the one listed first wins, so [`WorldMap::cast_fan`]
     /// answers exactly the same.
     pub fn cast(&self, origin: [f64; 3], dir: [f64; 3], max: f64) -> Option<Hit> {
-        let mut best = None;
+        self.fan_hit(origin, dir, max, self.cast_faces(origin, dir, max))
+    }
+
+    /// The nearest vertical face along the ray within `max` metres and its distance, or
+    /// `u32::MAX` for none, down the tree.
+    pub(super) fn cast_faces(&self, origin: [f64; 3], dir: [f64; 3], max: f64) -> (f64, u32) {
         if !is_vertical(dir) {
             // In the plan the ray runs along `dir`'s horizontal part, so a crossing's parameter
             // is the distance along the ray in 3D, with no normalising.
@@ -271,13 +276,10 @@ impl WorldMap {
                     Some(round_up(nearest.get().0))
                 },
             );
-            let (t, leaf) = nearest.get();
-            if leaf != u32::MAX {
-                best = Some(self.face_hit(leaf as usize, t, dir));
-            }
+            nearest.get()
+        } else {
+            (f64::INFINITY, u32::MAX)
         }
-        self.cast_planes(origin, dir, max, &mut best);
-        best
     }
 
     /// How far along the ray from `origin` in the unit direction `dir` it crosses face `i`

@@ -8,6 +8,6 @@ mod index;
 mod map;
 pub mod score;
 
-pub use fan::{FAN_MAX_FACES, PlaneFan};
+pub use fan::{FAN_MAX_FACES, FanCast, PlaneFan};
 pub use index::SurfaceId;
 pub use map::{Cap, Face, Hit, PointKind, Surface, WorldMap, point_segment_distance};

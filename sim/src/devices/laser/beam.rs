@@ -103,6 +103,8 @@ pub struct Pulses<'a> {
     map: &'a WorldMap,
     prepared: PreparedOptics,
     body: Option<Disc>,
+    /// Other robots, which every leg can meet.
+    others: &'a [Disc],
     max_range: f64,
 }
 
@@ -123,8 +125,14 @@ impl<'a> Pulses<'a> {
             map,
             prepared: optics.prepared(),
             body,
+            others: &[],
             max_range,
         }
+    }
+
+    /// The same pulses among other robots' bodies, which every leg can meet.
+    pub fn among(self, others: &'a [Disc]) -> Self {
+        Pulses { others, ..self }
     }
 
     /// Follows one pulse from `origin` along the unit direction `dir`.
@@ -157,9 +165,11 @@ impl<'a> Pulses<'a> {
             }
             // The first leg starts inside the robot: only later legs can meet its body.
             let contact = if leg == 0 {
-                first.map(|&hit| Contact::from(hit))
+                let wall = first.map(|&hit| Contact::from(hit));
+                nearer_disc(wall, self.others.iter(), o, d, remaining)
             } else {
-                first_contact(self.map, self.body.as_ref(), o, d, remaining)
+                let wall = self.map.cast(o, d, remaining).map(Contact::from);
+                nearer_disc(wall, self.body.iter().chain(self.others), o, d, remaining)
             };
             let Some(contact) = contact else {
                 return Echo::Lost;
@@ -226,42 +236,55 @@ impl From<Hit> for Contact {
     }
 }
 
-fn first_contact(
-    map: &WorldMap,
-    body: Option<&Disc>,
+/// `best`, or the nearest of `discs` the ray meets first (their sides, between the floor and
+/// their tops), within `max`.
+fn nearer_disc<'d>(
+    mut best: Option<Contact>,
+    discs: impl Iterator<Item = &'d Disc>,
     origin: [f64; 3],
     dir: [f64; 3],
     max: f64,
 ) -> Option<Contact> {
-    let wall = map.cast(origin, dir, max).map(Contact::from);
-    let Some(disc) = body else { return wall };
-    let horizontal = (dir[0] * dir[0] + dir[1] * dir[1]).sqrt();
-    if horizontal < 1e-12 {
-        return wall;
+    for disc in discs {
+        let limit = best.as_ref().map_or(max, |c| c.distance);
+        if let Some(c) = disc_contact(disc, origin, dir, limit) {
+            best = Some(c);
+        }
     }
-    let limit = wall.as_ref().map_or(max, |w| w.distance);
+    best
+}
+
+/// Where the ray meets `disc`'s side within `limit` metres.
+#[inline]
+fn disc_contact(disc: &Disc, origin: [f64; 3], dir: [f64; 3], limit: f64) -> Option<Contact> {
+    // A quick miss: the disc's centre farther from the ray's line (in the plan) than its radius,
+    // or behind the origin and clear of it.
+    let w = [disc.center[0] - origin[0], disc.center[1] - origin[1]];
+    let h2 = dir[0] * dir[0] + dir[1] * dir[1];
+    let across = w[0] * dir[1] - w[1] * dir[0];
+    let along = w[0] * dir[0] + w[1] * dir[1];
+    let r = disc.radius * 1.001 + 1e-6;
+    if across * across > r * r * h2 || (along < 0.0 && w[0] * w[0] + w[1] * w[1] > r * r) {
+        return None;
+    }
+    let horizontal = h2.sqrt();
+    if horizontal < 1e-12 {
+        return None;
+    }
     let ray = Ray::new(
         Vector::new(origin[0] as f32, origin[1] as f32),
         Vector::new((dir[0] / horizontal) as f32, (dir[1] / horizontal) as f32),
     );
     let at = Pose::from_translation(Vector::new(disc.center[0] as f32, disc.center[1] as f32));
     let ball = Ball::new(disc.radius as f32);
-    match ball.cast_ray_and_get_normal(&at, &ray, (limit * horizontal) as f32, true) {
-        Some(hit) if hit.time_of_impact > 0.0 => {
-            let t = f64::from(hit.time_of_impact) / horizontal;
-            let z = origin[2] + dir[2] * t;
-            if (0.0..=disc.height).contains(&z) {
-                Some(Contact {
-                    distance: t,
-                    normal: [f64::from(hit.normal.x), f64::from(hit.normal.y), 0.0],
-                    material: Material::Matte,
-                })
-            } else {
-                wall
-            }
-        }
-        _ => wall,
-    }
+    let hit = ball.cast_ray_and_get_normal(&at, &ray, (limit * horizontal) as f32, true)?;
+    let t = f64::from(hit.time_of_impact) / horizontal;
+    let z = origin[2] + dir[2] * t;
+    (hit.time_of_impact > 0.0 && (0.0..=disc.height).contains(&z)).then(|| Contact {
+        distance: t,
+        normal: [f64::from(hit.normal.x), f64::from(hit.normal.y), 0.0],
+        material: Material::Matte,
+    })
 }
 
 #[cfg(test)]

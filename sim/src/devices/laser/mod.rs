@@ -23,7 +23,7 @@ pub mod outliers;
 use crate::config::Outliers;
 use crate::config::robot_file::LaserDescription;
 use crate::rng::SimRng;
-use crate::world::{PlaneFan, WorldMap};
+use crate::world::{FanCast, PlaneFan, WorldMap};
 use beam::{Disc, Echo};
 use core::time::Duration;
 use rand_distr::{Distribution, StandardNormal};
@@ -223,22 +223,32 @@ impl LaserModel {
         stamp: Stamp,
         rng: &mut SimRng,
     ) -> LaserScan {
-        let pulses = beam::Pulses::new(map, body, self.range_max_m);
-        let (mut dirs, mut first) = (Vec::new(), Vec::new());
-        let axes = frame.axes();
+        self.scan_among(map, body, &[], frame, stamp, rng)
+    }
+
+    /// [`LaserModel::scan`] among other robots' bodies, which the beams meet too.
+    pub fn scan_among(
+        &self,
+        map: &WorldMap,
+        body: Option<Disc>,
+        others: &[Disc],
+        frame: LaserFrame,
+        stamp: Stamp,
+        rng: &mut SimRng,
+    ) -> LaserScan {
+        let pulses = beam::Pulses::new(map, body, self.range_max_m).among(others);
+        let mut fan = FanCast::default();
         map.cast_plane_fan(
             frame.origin,
-            axes,
+            frame.axes(),
             &self.beams,
             self.range_max_m,
-            &mut dirs,
-            &mut first,
+            &mut fan,
         );
-        let ranges_mm = dirs
-            .iter()
-            .zip(&first)
-            .map(|(&dir, first)| {
-                let echo = pulses.trace_from(frame.origin, dir, first.as_ref(), rng);
+        let ranges_mm = (0..fan.len())
+            .map(|k| {
+                let first = fan.hit(map, k);
+                let echo = pulses.trace_from(frame.origin, fan.dirs()[k], first.as_ref(), rng);
                 self.reading_mm(echo, rng)
             })
             .collect();
@@ -255,7 +265,20 @@ impl LaserModel {
         stamp: Stamp,
         rng: &mut SimRng,
     ) -> LaserScan {
-        let pulses = beam::Pulses::new(map, body, self.range_max_m);
+        self.scan_per_beam_among(map, body, &[], frame, stamp, rng)
+    }
+
+    /// [`LaserModel::scan_per_beam`] among other robots' bodies.
+    pub fn scan_per_beam_among(
+        &self,
+        map: &WorldMap,
+        body: Option<Disc>,
+        others: &[Disc],
+        frame: LaserFrame,
+        stamp: Stamp,
+        rng: &mut SimRng,
+    ) -> LaserScan {
+        let pulses = beam::Pulses::new(map, body, self.range_max_m).among(others);
         let ranges_mm = self
             .directions(frame)
             .into_iter()
