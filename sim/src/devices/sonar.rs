@@ -102,21 +102,20 @@ impl SonarModel {
     /// The distance transducer `k` hears with the base at `base`, or `None` for no echo.
     pub fn echo(&self, map: &WorldMap, base: Pose2, k: usize, rng: &mut SimRng) -> Option<f64> {
         let (origin, dirs) = self.rays(base, k)?;
-        // The fan's first legs in one sweep, then each ray followed only as far as the nearest
-        // echo so far: a longer path cannot bring a nearer one.
-        let mut first = Vec::with_capacity(dirs.len());
-        map.cast_fan(origin, &dirs, self.max_range, &mut first);
+        // Each ray followed only as far as the nearest echo so far (a longer path cannot bring
+        // a nearer one), the axis first, where the nearest echo most often is.
         let mut nearest = f64::INFINITY;
         for &k in &self.centre_first {
-            if let Some(r) = self.follow(map, origin, dirs[k], first[k], nearest) {
+            let first = map.cast(origin, dirs[k], self.max_range.min(nearest));
+            if let Some(r) = self.follow(map, origin, dirs[k], first, nearest) {
                 nearest = nearest.min(r);
             }
         }
         self.heard(nearest, rng)
     }
 
-    /// [`SonarModel::echo`] with each ray of the cone cast on its own and followed to its end:
-    /// the reference the sweep and the early stop are tested and benchmarked against.
+    /// [`SonarModel::echo`] with each ray of the cone followed to its end: the reference the
+    /// early stop is tested and benchmarked against.
     pub fn echo_per_ray(
         &self,
         map: &WorldMap,
@@ -283,7 +282,7 @@ mod tests {
     }
 
     #[test]
-    fn the_sweep_and_the_early_stop_hear_what_every_ray_alone_hears() {
+    fn the_early_stop_hears_what_every_ray_followed_to_its_end_hears() {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
         let robot =
             crate::config::RobotDescription::load(root.join("scenarios/robots/pioneer-3dx.toml"))

@@ -1,4 +1,4 @@
-//! Casting a fan of rays from one point: the 361 beams of a laser scan, the rays of a sonar cone.
+//! Casting a fan of rays from one point: the 361 beams of a laser scan.
 //!
 //! The rays share their origin, so instead of one tree descent per ray the faces are swept once:
 //! each face is seen from the origin under an angle, and only the rays inside that angle are

@@ -10,7 +10,7 @@
 //! candidate face's hit is kept only if the ray is between the face's bottom and top there. A
 //! horizontal ray never needs more: the level laser and the sonar cost what a 2D cast does. A
 //! tilted ray is also tested against the horizontal faces, the floor and the ceiling. Many rays
-//! from one point (a laser scan, a sonar cone) are cast in one sweep of the faces instead
+//! from one point (a laser scan) are cast in one sweep of the faces instead
 //! ([`WorldMap::cast_fan`], in `fan.rs`), with the same answers.
 
 use super::index::{SurfaceId, SurfaceIndex};
