@@ -377,6 +377,15 @@ fn classify_points(record: &RunRecord, map: &WorldMap) -> ScanPoints {
     let mut k = 0usize;
     for r in &record.scans {
         let at_odometry = r.frame.carried(r.truth, r.odometry);
+        // Each frame's axes once a scan, each beam's angle once: a point is then sums and
+        // products.
+        let point = |frame: &crate::devices::laser::LaserFrame,
+                     (forward, left): ([f64; 3], [f64; 3]),
+                     (sa, ca): (f64, f64),
+                     range: f64| {
+            [0, 1, 2].map(|j| frame.origin[j] + range * (ca * forward[j] + sa * left[j]))
+        };
+        let (axes, odometry_axes) = (r.frame.axes(), at_odometry.axes());
         for i in 0..r.scan.len() {
             let Some(range) = r.scan.range_m(i) else {
                 continue;
@@ -385,15 +394,16 @@ fn classify_points(record: &RunRecord, map: &WorldMap) -> ScanPoints {
             if !k.is_multiple_of(stride) {
                 continue;
             }
-            let angle = r.scan.angle(i);
-            let p = r.frame.point(angle, range);
+            let trig = r.scan.angle(i).sin_cos();
+            let p = point(&r.frame, axes, trig, range);
             let target = match PointKind::of(map, p) {
                 PointKind::Ghost => &mut out.ghosts,
                 PointKind::Floor => &mut out.floor,
                 PointKind::Surface => &mut out.seen,
             };
             target.push(p);
-            out.drifted.push(at_odometry.point(angle, range));
+            out.drifted
+                .push(point(&at_odometry, odometry_axes, trig, range));
         }
     }
     out
