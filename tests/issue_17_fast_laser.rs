@@ -8,7 +8,7 @@ use rand::{RngExt, SeedableRng};
 use robot::{Pose2, Stamp};
 use sim::config::{Outliers, WorldDescription};
 use sim::devices::laser::beam::Disc;
-use sim::devices::laser::{LaserFrame, LaserModel};
+use sim::devices::laser::{Casting, LaserFrame, LaserModel};
 use sim::world::{FAN_MAX_FACES, FanCast, Hit, WorldMap};
 
 /// Every world in `worlds/`, and the lab grown with boxes to just under the sweep's limit.
@@ -143,6 +143,7 @@ fn whole_scans_equal_the_reference_reading_for_reading() {
                 0.01,
                 Outliers::preset(outliers).unwrap(),
             );
+            let reference = model.clone().with_casting(Casting::PerBeam);
             for k in 0..40u64 {
                 let frame = random_frame(&world, &mut rng);
                 // The robot's own body, which reflected beams can meet.
@@ -166,8 +167,7 @@ fn whole_scans_equal_the_reference_reading_for_reading() {
                     })
                     .collect();
                 let fast = model.scan_among(&map, body, &others, frame, Stamp(k), &mut a);
-                let reference =
-                    model.scan_per_beam_among(&map, body, &others, frame, Stamp(k), &mut b);
+                let reference = reference.scan_among(&map, body, &others, frame, Stamp(k), &mut b);
                 assert_eq!(fast, reference, "{name}, {outliers}, {frame:?}");
                 assert_eq!(
                     a.random::<u64>(),

@@ -5,7 +5,7 @@
 //!   materials' optics (black loss, glass windows and mirrors, metal, grazing loss), Gaussian
 //!   noise and, where named, the random outliers of the thesis's studies; from poses all over
 //!   the world, level and tilted. `scan` casts the beams' first legs in one sweep of the faces
-//!   (`WorldMap::cast_plane_fan`); the reference, `scan_per_beam`, casts each beam down the
+//!   (`WorldMap::cast_plane_fan`); the reference, `Casting::PerBeam`, casts each beam down the
 //!   world's tree — the same readings, bit for bit (tests/issue_17_fast_laser.rs);
 //! - sonar: one cycle of the ring, 16 transducers each sampling its cone with several rays,
 //!   specular loss and multi-bounce paths; the reference is the same ring with every ray cast on
@@ -18,7 +18,7 @@
 use robot::{Pose2, Stamp};
 use sim::config::Outliers;
 use sim::config::{RobotDescription, WorldDescription};
-use sim::devices::laser::{LaserFrame, LaserModel};
+use sim::devices::laser::{Casting, LaserFrame, LaserModel};
 use sim::devices::sonar::SonarModel;
 use sim::world::WorldMap;
 use std::hint::black_box;
@@ -100,6 +100,7 @@ fn main() {
                 pioneer.laser.sigma_m.get(),
                 Outliers::preset(outliers).expect("a preset"),
             );
+            let reference = model.clone().with_casting(Casting::PerBeam);
             // Tilted: the thesis robot's laser height on its pan-tilt, the plane pitched down.
             let frames: Vec<LaserFrame> = poses
                 .iter()
@@ -126,7 +127,7 @@ fn main() {
                 },
                 |k| {
                     let f = frames[k % frames.len()];
-                    black_box(model.scan_per_beam(&map, None, f, Stamp(k as u64), &mut rng2));
+                    black_box(reference.scan(&map, None, f, Stamp(k as u64), &mut rng2));
                 },
             );
             let what = if tilt_deg == 0.0 {

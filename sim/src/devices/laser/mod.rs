@@ -127,6 +127,16 @@ impl LaserFrame {
     }
 }
 
+/// How a scan's beams are cast: the same readings either way, to the last bit.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum Casting {
+    /// The beams' first legs in one sweep of the world's faces (the default).
+    Sweep,
+    /// Each beam cast on its own down the world's tree: the reference the sweep is tested and
+    /// benchmarked against.
+    PerBeam,
+}
+
 /// A laser model: geometry, noise and timing.
 #[derive(Clone, Debug)]
 pub struct LaserModel {
@@ -143,6 +153,8 @@ pub struct LaserModel {
     baud: u32,
     /// The beams' angles in the scan plane.
     beams: PlaneFan,
+    /// How the beams are cast.
+    casting: Casting,
 }
 
 impl LaserModel {
@@ -172,7 +184,13 @@ impl LaserModel {
             ),
             baud: desc.baud,
             beams: PlaneFan::new(angles),
+            casting: Casting::Sweep,
         }
+    }
+
+    /// The same laser with its beams cast as `casting` says.
+    pub fn with_casting(self, casting: Casting) -> Self {
+        LaserModel { casting, ..self }
     }
 
     /// The beams' angles in the scan plane.
@@ -213,8 +231,9 @@ impl LaserModel {
     /// Measures one scan from `frame`. `body` is the robot's own body, which reflected beams can
     /// meet.
     ///
-    /// The beams' first legs are cast in one sweep of the world ([`WorldMap::cast_fan`]); the
-    /// result is [`LaserModel::scan_per_beam`]'s to the last bit.
+    /// The beams' first legs are cast in one sweep of the world ([`WorldMap::cast_plane_fan`]);
+    /// the result is the same, to the last bit, as with each beam cast on its own
+    /// ([`Casting::PerBeam`]).
     pub fn scan(
         &self,
         map: &WorldMap,
@@ -237,6 +256,17 @@ impl LaserModel {
         rng: &mut SimRng,
     ) -> LaserScan {
         let pulses = beam::Pulses::new(map, body, self.range_max_m).among(others);
+        if self.casting == Casting::PerBeam {
+            let ranges_mm = self
+                .directions(frame)
+                .into_iter()
+                .map(|dir| {
+                    let echo = pulses.trace(frame.origin, dir, rng);
+                    self.reading_mm(echo, rng)
+                })
+                .collect();
+            return self.telegram(stamp, ranges_mm);
+        }
         let mut fan = FanCast::default();
         map.cast_plane_fan(
             frame.origin,
@@ -249,41 +279,6 @@ impl LaserModel {
             .map(|k| {
                 let first = fan.hit(map, k);
                 let echo = pulses.trace_from(frame.origin, fan.dirs()[k], first.as_ref(), rng);
-                self.reading_mm(echo, rng)
-            })
-            .collect();
-        self.telegram(stamp, ranges_mm)
-    }
-
-    /// [`LaserModel::scan`] cast beam by beam down the world's tree: the reference the sweep is
-    /// tested and benchmarked against.
-    pub fn scan_per_beam(
-        &self,
-        map: &WorldMap,
-        body: Option<Disc>,
-        frame: LaserFrame,
-        stamp: Stamp,
-        rng: &mut SimRng,
-    ) -> LaserScan {
-        self.scan_per_beam_among(map, body, &[], frame, stamp, rng)
-    }
-
-    /// [`LaserModel::scan_per_beam`] among other robots' bodies.
-    pub fn scan_per_beam_among(
-        &self,
-        map: &WorldMap,
-        body: Option<Disc>,
-        others: &[Disc],
-        frame: LaserFrame,
-        stamp: Stamp,
-        rng: &mut SimRng,
-    ) -> LaserScan {
-        let pulses = beam::Pulses::new(map, body, self.range_max_m).among(others);
-        let ranges_mm = self
-            .directions(frame)
-            .into_iter()
-            .map(|dir| {
-                let echo = pulses.trace(frame.origin, dir, rng);
                 self.reading_mm(echo, rng)
             })
             .collect();
