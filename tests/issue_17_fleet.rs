@@ -1,7 +1,7 @@
 //! Issue 17: many robots stepping together. Each robot of a fleet is a whole twin (firmware,
 //! motors, physics, laser); the fleet steps them over the threads of a rayon pool, and gives the
 //! same bits on one thread or two; a fleet of one is the robot alone; each robot's laser sees
-//! the others.
+//! the others, and robots that drive into each other stop each other.
 
 use robot::{Pose2, Stamp};
 use sim::Twin;
@@ -156,4 +156,53 @@ fn a_robot_on_a_wall_is_named() {
         .err()
         .expect("robot 1 overlaps the west wall");
     assert!(err.to_string().contains("robot 1 at (0.05, 2.00)"), "{err}");
+}
+
+#[test]
+fn robots_of_a_fleet_bump_into_each_other() {
+    // Two robots 1.6 m apart drive straight at each other: they meet and stop each other, as a
+    // wall would, instead of passing through; both count the collision.
+    let world = crate::common::big_room();
+    let robot = crate::common::robot("pioneer-3dx");
+    let starts = [
+        Pose2::new(-0.8, 0.0, 0.0),
+        Pose2::new(0.8, 0.0, std::f64::consts::PI),
+    ];
+    let mut fleet = Fleet::new(&world, &robot, &NoiseSettings::NONE, 1, &starts).unwrap();
+    for twin in fleet.robots_mut() {
+        twin.board_mut()
+            .deliver(Stamp::ZERO, b"v160 160\n".to_vec());
+    }
+    let mut closest = f64::INFINITY;
+    for _ in 0..1000 {
+        fleet.step(|_, _| {});
+        let [a, b] = [0, 1].map(|k| fleet.robots()[k].body_disc());
+        closest = closest.min((a.center[0] - b.center[0]).hypot(a.center[1] - b.center[1]));
+    }
+    let radius = fleet.robots()[0].body_disc().radius;
+    assert!(
+        closest > 2.0 * radius - 0.03,
+        "the bodies ({radius} m) came within {closest:.3} m of each other"
+    );
+    for (k, twin) in fleet.robots().iter().enumerate() {
+        assert!(twin.collisions() >= 1, "robot {k} counted the collision");
+        assert!(
+            twin.true_pose().x.abs() < 0.8,
+            "robot {k} moved towards the other"
+        );
+    }
+    // Alone, a robot drives on through where the other stood.
+    let mut alone = Fleet::new(&world, &robot, &NoiseSettings::NONE, 1, &starts[..1]).unwrap();
+    alone.robots_mut()[0]
+        .board_mut()
+        .deliver(Stamp::ZERO, b"v160 160\n".to_vec());
+    for _ in 0..1000 {
+        alone.step(|_, _| {});
+    }
+    let free = alone.robots()[0].true_pose().x;
+    let stopped = fleet.robots()[0].true_pose().x;
+    assert!(
+        free > stopped + 0.2,
+        "alone it reached x = {free:.2} m, stopped at {stopped:.2} m"
+    );
 }

@@ -51,6 +51,9 @@ pub struct OtherRobots {
     pub all: std::sync::Arc<Vec<crate::devices::laser::beam::Disc>>,
     /// This robot's place in `all`.
     pub me: usize,
+    /// The others near enough to touch, as immovable discs in this robot's physics, by their
+    /// place in `all`.
+    pub near: std::collections::BTreeMap<usize, rapier2d::prelude::RigidBodyHandle>,
 }
 
 /// The base microcontroller board of a robot.

@@ -3,12 +3,14 @@
 //! draws from the stream `robot/k` of the fleet's seed), all advanced one [`STEP`] at a time over
 //! the machine's cores.
 //!
-//! Each robot's laser sees the other robots' bodies as they stood at the start of the step (a
-//! snapshot taken before it, so a robot's step reads nothing another writes during it): the
-//! fleet gives the same bits on one thread or many.
+//! Each robot meets the other robots' bodies as they stood at the start of the step (a snapshot
+//! taken before it, so a robot's step reads nothing another writes during it): its laser sees
+//! them on every leg, and those within reach stand in its physics as immovable discs, so two
+//! robots that drive into each other stop each other as a wall would (and count the collision).
+//! The fleet gives the same bits on one thread or many.
 //!
-//! What the fleet does not do yet: robots do not bump into each other (their bodies meet the
-//! world's walls only), and the sonar rings do not hear other robots.
+//! What the fleet does not do yet: the sonar rings do not hear other robots, and a robot pushed
+//! by another feels it as a wall, not as a body it could shove.
 //!
 //! [`STEP`]: super::STEP
 
@@ -102,7 +104,7 @@ impl Fleet {
     /// Advances every robot by one step, then lets `after` act on each (read its scans, send it
     /// commands), robots spread over the threads of the current rayon pool.
     ///
-    /// Each robot's laser sees the others' bodies where they stood at the start of the step.
+    /// Each robot meets the others' bodies where they stood at the start of the step.
     pub fn step(&mut self, after: impl Fn(usize, &mut Twin) + Sync) {
         let bodies: Arc<Vec<Disc>> = Arc::new(self.robots.iter().map(Twin::body_disc).collect());
         self.robots

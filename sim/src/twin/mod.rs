@@ -235,10 +235,52 @@ impl Twin {
         }
     }
 
-    /// Every robot's body in the world (this one's at `me`, which it does not see), which this
-    /// robot's laser meets from now on (see [`fleet::Fleet`]).
+    /// Every robot's body in the world (this one's at `me`), which this robot's laser meets
+    /// from now on and its body bumps into (see [`fleet::Fleet`]): those within reach of its own
+    /// body this step stand in its physics as immovable discs, so a robot is stopped by another
+    /// as by a wall.
     pub fn set_other_robots(&mut self, all: std::sync::Arc<Vec<Disc>>, me: usize) {
-        *self.world.resource_mut::<OtherRobots>() = OtherRobots { all, me };
+        let own = self.body_disc();
+        let mut near = std::mem::take(&mut self.world.resource_mut::<OtherRobots>().near);
+        let mut physics = self.world.resource_mut::<Physics>();
+        let physics = &mut physics.0;
+        // Within a step a base moves centimetres: a disc farther than half a metre beyond
+        // touching cannot be met before the next step.
+        let reaches = |d: &Disc| {
+            let gap = (d.center[0] - own.center[0]).hypot(d.center[1] - own.center[1]);
+            gap < d.radius + own.radius + 0.5
+        };
+        let wanted: Vec<usize> = (0..all.len())
+            .filter(|&j| j != me && reaches(&all[j]))
+            .collect();
+        let gone: Vec<usize> = near
+            .keys()
+            .copied()
+            .filter(|j| !wanted.contains(j))
+            .collect();
+        for j in gone {
+            if let Some(handle) = near.remove(&j) {
+                physics.remove_body(handle);
+            }
+        }
+        for j in wanted {
+            let at = Vector::new(all[j].center[0] as f32, all[j].center[1] as f32);
+            match near.get(&j) {
+                Some(&handle) => {
+                    if let Some(body) = physics.bodies.get_mut(handle) {
+                        body.set_next_kinematic_translation(at);
+                    }
+                }
+                None => {
+                    let (handle, _) = physics.insert(
+                        RigidBodyBuilder::kinematic_position_based().translation(at),
+                        ColliderBuilder::ball(all[j].radius as f32).friction(0.3),
+                    );
+                    near.insert(j, handle);
+                }
+            }
+        }
+        *self.world.resource_mut::<OtherRobots>() = OtherRobots { all, me, near };
     }
 
     /// Advances the world by one [`STEP`].
