@@ -95,6 +95,18 @@ impl Layers {
         self.legend.is_empty()
     }
 
+    /// The width a legend column needs for its longest label at the pictures' 13-pixel
+    /// sans-serif (about 7 pixels a character, after the 30-pixel swatch), at least `least`.
+    pub fn column_width(&self, least: f64) -> f64 {
+        let longest = self
+            .legend
+            .iter()
+            .map(|e| e.label.chars().count())
+            .max()
+            .unwrap_or(0);
+        least.max(36.0 + 7.0 * longest as f64)
+    }
+
     /// Rows the legend takes in `columns` columns.
     pub fn rows(&self, columns: usize) -> usize {
         self.legend.len().div_ceil(columns.max(1))

@@ -309,8 +309,9 @@ fn render(record: &RunRecord, world: &WorldDescription, map: &WorldMap) -> Strin
     }
 
     // Legend, figures and scale bar below the plan.
-    let width = (plan.origin[0] + plan.width() + PAD).max(LEGEND_COLUMN + 2.0 * PAD);
-    let columns = (((width - 2.0 * PAD) / LEGEND_COLUMN).floor() as usize).clamp(1, 3);
+    let column = layers.column_width(LEGEND_COLUMN);
+    let width = (plan.origin[0] + plan.width() + PAD).max(column + 2.0 * PAD);
+    let columns = (((width - 2.0 * PAD) / column).floor() as usize).clamp(1, 3);
     let legend_top = plan.origin[1] + plan.height() + Plan::BELOW + 12.0;
     let figures_y = legend_top + 20.0 * layers.rows(columns) as f64 + 10.0;
     let figures_lines = 2 + usize::from(record.localisation.is_some());
@@ -323,7 +324,7 @@ fn render(record: &RunRecord, world: &WorldDescription, map: &WorldMap) -> Strin
     );
     let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
     s.push_str(layers.body());
-    s.push_str(&layers.legend(PAD, legend_top, columns, LEGEND_COLUMN));
+    s.push_str(&layers.legend(PAD, legend_top, columns, column));
     let _ = writeln!(
         s,
         r#"<text x="{PAD}" y="{figures_y:.0}">{}: {} scan{}, {:.1} m in {:.1} s, seed {}</text>"#,
