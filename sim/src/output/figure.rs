@@ -41,6 +41,14 @@ pub struct Layers {
     legend: Vec<Entry>,
 }
 
+/// The opening of a picture `width` × `height` pixels in `font_size`-pixel sans-serif, on
+/// white: the `<svg>` element and its background.
+pub fn open_svg(width: f64, height: f64, font_size: u32) -> String {
+    format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{width:.0}\" height=\"{height:.0}\" viewBox=\"0 0 {width:.0} {height:.0}\" font-family=\"sans-serif\" font-size=\"{font_size}\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
+    )
+}
+
 impl Layers {
     /// Adds a layer with its legend entry; an empty `body` draws nothing and lists nothing.
     pub fn add(&mut self, key: &str, label: impl Into<String>, swatch: Swatch, body: &str) {

@@ -4,7 +4,7 @@
 //!
 //! A sharper map puts the same wall's points into fewer cells: [`occupied_cells`] counts them.
 
-use super::figure::{Layers, Plan, Swatch};
+use super::figure::{Layers, Plan, Swatch, open_svg};
 use super::svg::{path_data, xml_escape};
 use robot::Pose2;
 use std::collections::HashSet;
@@ -135,12 +135,7 @@ fn render(panels: &[Panel<'_>]) -> String {
         .first()
         .map_or(60.0, |p| p.origin[1] + p.height() + Plan::BELOW);
     let height = bottom + 44.0;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{height:.0}" viewBox="0 0 {width:.0} {height:.0}" font-family="sans-serif" font-size="15">"#
-    );
-    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    let mut s = open_svg(width, height, 15);
     s.push_str(layers.body());
     s.push_str(&layers.legend(20.0, bottom + 18.0, 3, 260.0));
     if let Some(plan) = plans.first() {

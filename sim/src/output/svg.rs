@@ -2,7 +2,7 @@
 //! drift shows at a glance; a grid in metres, a scale bar and a legend of exactly what is drawn.
 
 pub(super) use super::figure::xml_escape;
-use super::figure::{Layers, Plan, Swatch};
+use super::figure::{Layers, Plan, Swatch, open_svg};
 use super::summary::estimate_errors;
 use crate::config::{Material, WorldDescription};
 use crate::record::RunRecord;
@@ -317,12 +317,7 @@ fn render(record: &RunRecord, world: &WorldDescription, map: &WorldMap) -> Strin
     let figures_lines = 2 + usize::from(record.localisation.is_some());
     let bar_y = figures_y + 18.0 * figures_lines as f64 + 8.0;
     let height = bar_y + 12.0;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{height:.0}" viewBox="0 0 {width:.0} {height:.0}" font-family="sans-serif" font-size="13">"#
-    );
-    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    let mut s = open_svg(width, height, 13);
     s.push_str(layers.body());
     s.push_str(&layers.legend(PAD, legend_top, columns, column));
     let _ = writeln!(

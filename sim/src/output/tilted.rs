@@ -7,7 +7,7 @@
 //! front of the floor below it. The right panel places the points in the world, with the walls.
 //! Readings beyond either view are marked at its edge and counted in the legend.
 
-use super::figure::{Layers, Plan, Swatch};
+use super::figure::{Layers, Plan, Swatch, open_svg};
 use super::svg::{draw_walls, point_colour, xml_escape};
 use crate::config::WorldDescription;
 use crate::record::{RunRecord, ScanRecord};
@@ -250,12 +250,7 @@ fn render(r: &ScanRecord, world: &WorldDescription, map: &WorldMap, scenario: &s
     let legend_top = body + 70.0;
     let columns = 3;
     let height = legend_top + 20.0 * layers.rows(columns) as f64 + 12.0;
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{height:.0}" viewBox="0 0 {width:.0} {height:.0}" font-family="sans-serif" font-size="13">"#
-    );
-    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    let mut s = open_svg(width, height, 13);
     s.push_str(layers.body());
     let middle = r.scan.len() / 2;
     let measured = r

@@ -226,8 +226,13 @@ impl Twin {
 
     /// The robot's body where it stands now, as other robots' lasers see it.
     pub fn body_disc(&self) -> Disc {
+        self.disc_at(self.true_pose())
+    }
+
+    /// The robot's body with its base at `base`.
+    fn disc_at(&self, base: Pose2) -> Disc {
         let chassis = self.component::<Chassis>();
-        let (cx, cy) = self.true_pose().transform_point(chassis.center_x, 0.0);
+        let (cx, cy) = base.transform_point(chassis.center_x, 0.0);
         Disc {
             center: [cx, cy],
             radius: chassis.radius,
@@ -347,13 +352,7 @@ impl Twin {
         let pending = self.component_mut::<Lidar>().outbox.pop_front()?;
         let map = &self.world.resource::<Map>().0;
         let lidar = self.component::<Lidar>();
-        let chassis = self.component::<Chassis>();
-        let (cx, cy) = pending.base.transform_point(chassis.center_x, 0.0);
-        let body = Disc {
-            center: [cx, cy],
-            radius: chassis.radius,
-            height: chassis.height,
-        };
+        let body = self.disc_at(pending.base);
         let robots = self.world.resource::<OtherRobots>();
         let others: Vec<Disc> = robots
             .all

@@ -50,8 +50,9 @@ impl Turns {
         if self.buckets.is_empty() {
             return self.rel.partition_point(below);
         }
-        // x · BUCKETS / 4 is exact (a power of two), so is its bucket.
-        let j = ((x * (BUCKETS as f64 / 4.0)).floor().max(0.0) as usize).min(BUCKETS - 1);
+        // x · BUCKETS / 4 is exact (a power of two), so is its bucket; the conversion truncates
+        // and takes what is below zero to bucket 0.
+        let j = ((x * (BUCKETS as f64 / 4.0)) as usize).min(BUCKETS - 1);
         let (lo, hi) = (self.buckets[j] as usize, self.buckets[j + 1] as usize);
         lo + self.rel[lo..hi].partition_point(below)
     }

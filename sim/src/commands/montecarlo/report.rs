@@ -268,7 +268,7 @@ fn colour_of(kind: MatcherKind, k: usize) -> &'static str {
 /// The cumulative distributions of e_θ (top) and e_t (bottom) per rate (columns), one curve per
 /// matcher and one (dashed) for the odometry guess they start from, on logarithmic axes.
 fn errors_svg(study: &Study, records: &[Record]) -> String {
-    use crate::output::figure::{Layers, Swatch, xml_escape};
+    use crate::output::figure::{Layers, Swatch, open_svg, xml_escape};
     let (pw, ph, margin) = (420.0, 260.0, 70.0);
     let cols = study.outlier_rates.len();
     let width = margin + cols as f64 * (pw + margin);
@@ -396,12 +396,7 @@ fn errors_svg(study: &Study, records: &[Record]) -> String {
             &curves[k + 1],
         );
     }
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{height:.0}" viewBox="0 0 {width:.0} {height:.0}" font-family="sans-serif" font-size="12">"#
-    );
-    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    let mut s = open_svg(width, height, 12);
     let _ = writeln!(
         s,
         r#"<text x="{margin}" y="24" font-size="16">{}: share of trials with an error at most x ({} trials per rate)</text>"#,
