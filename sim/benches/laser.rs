@@ -11,6 +11,9 @@
 //!   specular loss and multi-bounce paths; the reference is the same ring with every ray cast on
 //!   its own to its end.
 //!
+//! Beside them, the sweep's geometry alone (`cast_plane_fan` and each beam's first surface, no
+//! optics, no noise): the ray-casting limit a whole scan is measured against.
+//!
 //! Figures are the best of 15 rounds (the least disturbed by the machine's other work).
 //!
 //! `cargo bench --bench laser`
@@ -20,7 +23,7 @@ use sim::config::Outliers;
 use sim::config::{RobotDescription, WorldDescription};
 use sim::devices::laser::{Casting, LaserFrame, LaserModel};
 use sim::devices::sonar::SonarModel;
-use sim::world::WorldMap;
+use sim::world::{FanCast, WorldMap};
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -65,8 +68,10 @@ fn best_of(n: usize, mut a: impl FnMut(usize), mut b: impl FnMut(usize)) -> (f64
 fn main() {
     let pioneer = RobotDescription::load(root().join("scenarios/robots/pioneer-3dx.toml")).unwrap();
     let lab_text = std::fs::read_to_string(root().join("worlds/lab.toml")).unwrap();
-    println!("| world | scan | sweep, scans/s | reference, scans/s | speed-up |");
-    println!("|---|---|---|---|---|");
+    println!(
+        "| world | scan | first surfaces only, scans/s | sweep, scans/s | reference, scans/s | speed-up |"
+    );
+    println!("|---|---|---|---|---|---|");
     let cluttered = sim::world::clutter::lab_with_boxes(&lab_text, 72);
     let worlds = [
         (
@@ -117,6 +122,20 @@ fn main() {
                     }
                 })
                 .collect();
+            // The first surface of every beam and nothing else: what the geometry alone costs.
+            let mut fan = FanCast::default();
+            let (geometry, _) = best_of(
+                2000,
+                |k| {
+                    let f = frames[k % frames.len()];
+                    let range = model.range_max_m();
+                    map.cast_plane_fan(f.origin, f.axes(), model.beams(), range, &mut fan);
+                    for j in 0..fan.len() {
+                        black_box(fan.hit(&map, j));
+                    }
+                },
+                |_| {},
+            );
             let mut rng = sim::rng::stream(1, "bench");
             let mut rng2 = sim::rng::stream(1, "bench");
             let (sweep, reference) = best_of(
@@ -136,8 +155,9 @@ fn main() {
                 format!("tilted {tilt_deg}°, outliers {outliers}")
             };
             println!(
-                "| {name} ({} faces) | {what} | {:.0} | {:.0} | {:.2} |",
+                "| {name} ({} faces) | {what} | {:.0} | {:.0} | {:.0} | {:.2} |",
                 map.faces().len(),
+                1.0 / geometry,
                 1.0 / sweep,
                 1.0 / reference,
                 reference / sweep

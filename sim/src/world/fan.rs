@@ -233,7 +233,7 @@ impl WorldMap {
                 .extend(out.dirs.iter().map(|&d| self.cast_faces(origin, d, max)));
             return;
         };
-        let rays = Rays::new(&out.dirs);
+        out.rays.fill(&out.dirs);
         let p0 = pseudo_angle([fan.trig[0].1, fan.trig[0].0]);
         let in_plane = |v: [f64; 2]| {
             let q = [
@@ -242,7 +242,7 @@ impl WorldMap {
             ];
             wrap(pseudo_angle(q) - p0)
         };
-        self.sweep(origin, &rays, turns, in_plane, max, &mut out.nearest);
+        self.sweep(origin, &out.rays, turns, in_plane, max, &mut out.nearest);
     }
 
     /// The sweep: each face in reach tried against the rays whose pseudo-angle `rel` (from the
@@ -316,6 +316,8 @@ pub struct FanCast {
     dirs: Vec<[f64; 3]>,
     /// Each ray's nearest face and its distance (`u32::MAX`: none).
     nearest: Vec<(f64, u32)>,
+    /// The directions again by component, for the sweep.
+    rays: Rays,
 }
 
 impl FanCast {
@@ -342,6 +344,7 @@ impl FanCast {
 }
 
 /// The rays' directions by component, for a tight loop over many rays.
+#[derive(Clone, Debug, Default)]
 struct Rays {
     x: Vec<f64>,
     y: Vec<f64>,
@@ -354,6 +357,17 @@ impl Rays {
             x: dirs.iter().map(|d| d[0]).collect(),
             y: dirs.iter().map(|d| d[1]).collect(),
             z: dirs.iter().map(|d| d[2]).collect(),
+        }
+    }
+
+    /// The same for `dirs`, in these buffers.
+    fn fill(&mut self, dirs: &[[f64; 3]]) {
+        for (k, column) in [&mut self.x, &mut self.y, &mut self.z]
+            .into_iter()
+            .enumerate()
+        {
+            column.clear();
+            column.extend(dirs.iter().map(|d| d[k]));
         }
     }
 
