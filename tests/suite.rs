@@ -13,6 +13,7 @@ mod issue_16_viewer;
 mod issue_17_fast_laser;
 mod issue_17_fleet;
 mod issue_17_polling;
+mod issue_18_honest_matches;
 mod issue_2_bad_input;
 mod issue_2_collision;
 mod issue_2_contract;

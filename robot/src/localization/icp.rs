@@ -92,7 +92,7 @@ impl ScanMatcher for LeastSquares {
             pose = step.compose(&pose);
             result.pose = pose;
             if self.convergence.reached(&step) {
-                result.converged = true;
+                result.settled = true;
                 return result;
             }
         }

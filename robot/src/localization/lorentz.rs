@@ -5,6 +5,7 @@
 
 use super::lines::{LineParams, lines_of};
 use super::matcher::{Convergence, MatchResult, Reference, ScanMatcher, solve3, transform_all};
+use super::quality::polish;
 use super::scan::ScanPoints;
 use crate::geometry::{Pose2, wrap_angle};
 
@@ -43,6 +44,12 @@ pub struct Lorentz {
     /// lies where the reference did not look. Not in the thesis; without it a 0.5 m retreat down
     /// the L-corridor comes out 0.1–0.4 m short. Default true.
     pub drop_edge_pairs: bool,
+    /// A last point-to-line stage ([`polish`](super::polish)) after the σ passes: at most this
+    /// many Gauss–Newton rounds on the current points within 5 cm of the reference's surfaces,
+    /// Cauchy-weighted at 1 cm. Not in the thesis; 0 (the default) leaves it out, and
+    /// [`Lorentz::with_lines`] has 5: the median error of synthetic pairs falls from 2.0 to
+    /// 1.9 mm without outliers and from 2.8 to 2.5 mm with 20 % (`twin matchers`).
+    pub polish_rounds: usize,
 }
 
 impl Lorentz {
@@ -61,6 +68,7 @@ impl Lorentz {
     pub fn with_lines() -> Self {
         Lorentz {
             lines: Some(LineParams::default()),
+            polish_rounds: 5,
             ..Lorentz::default()
         }
     }
@@ -170,6 +178,7 @@ impl Default for Lorentz {
             },
             lines: None,
             drop_edge_pairs: true,
+            polish_rounds: 0,
         }
     }
 }
@@ -200,7 +209,7 @@ impl ScanMatcher for Lorentz {
         let mut hints = vec![None; current.len()];
         let mut result = MatchResult::unmatched(guess);
         for &sigma in &self.sigmas_m {
-            result.converged = false;
+            result.settled = false;
             for _ in 0..self.convergence.max_iterations {
                 result.iterations += 1;
                 let pose = Pose2::new(phi[1], phi[2], phi[0]);
@@ -242,12 +251,23 @@ impl ScanMatcher for Lorentz {
                     wrap_angle(phi[0] - before[0]),
                 );
                 if self.convergence.reached(&step) {
-                    result.converged = true;
+                    result.settled = true;
                     break;
                 }
             }
         }
         result.pose = Pose2::new(phi[1], phi[2], wrap_angle(phi[0]));
+        if self.polish_rounds > 0 {
+            let polished = polish(
+                reference,
+                &current.xy,
+                result.pose,
+                self.polish_rounds,
+                0.01,
+                0.05,
+            );
+            result.pose = Pose2::new(polished.x, polished.y, wrap_angle(polished.theta));
+        }
         result
     }
 }

@@ -36,6 +36,10 @@ pub struct MapConfig {
     pub max_correction_rad: f64,
     /// The share of a motion odometry may get wrong. Default 0.5.
     pub correction_share: f64,
+    /// Only a match flagged [`converged`](MatchResult::converged) (its quality passes the
+    /// [`TrustRule`](super::TrustRule)) is used; any other falls back to odometry and is counted
+    /// in [`MatchStats::fallbacks`]. Default true.
+    pub require_converged: bool,
 }
 
 impl Default for MapConfig {
@@ -49,6 +53,7 @@ impl Default for MapConfig {
             max_correction_m: 0.5,
             max_correction_rad: 45f64.to_radians(),
             correction_share: 0.5,
+            require_converged: true,
         }
     }
 }
@@ -65,8 +70,8 @@ pub struct Placed {
     pub odometry: Pose2,
     /// The match against the reference (`None` for the first scan).
     pub matched: Option<MatchResult>,
-    /// Whether the match was used (enough correspondences, a correction within the bounds)
-    /// rather than the odometry guess.
+    /// Whether the match was used (converged, enough correspondences, a correction within the
+    /// bounds) rather than the odometry guess.
     pub trusted: bool,
 }
 
@@ -75,8 +80,10 @@ pub struct Placed {
 pub struct MatchStats {
     /// Matches made (every placed scan but the first).
     pub matches: usize,
-    /// Matches trusted (enough correspondences).
+    /// Matches trusted (converged, enough correspondences, a plausible correction).
     pub trusted: usize,
+    /// Matches not trusted, whose scans were placed by odometry instead.
+    pub fallbacks: usize,
     /// Matches that converged before their iteration cap.
     pub converged: usize,
     /// Mean correspondence searches per match.
@@ -90,6 +97,10 @@ impl MatchStats {
         MatchStats {
             matches: matches.len(),
             trusted: placed.iter().filter(|p| p.trusted).count(),
+            fallbacks: placed
+                .iter()
+                .filter(|p| p.matched.is_some() && !p.trusted)
+                .count(),
             converged: matches.iter().filter(|m| m.converged).count(),
             mean_iterations: matches.iter().map(|m| f64::from(m.iterations)).sum::<f64>()
                 / matches.len().max(1) as f64,
@@ -254,7 +265,8 @@ impl MapBuilder {
                 let base_guess = key.estimate.relative(&predicted);
                 let laser_guess = key.mount.inverse().compose(&base_guess).compose(&mount);
                 let result = self.matcher.align(&key.reference, &points, laser_guess);
-                let trusted = result.correspondences >= self.config.min_correspondences
+                let trusted = (result.converged || !self.config.require_converged)
+                    && result.correspondences >= self.config.min_correspondences
                     && result.pose.x.is_finite()
                     && result.pose.y.is_finite()
                     && result.pose.theta.is_finite()

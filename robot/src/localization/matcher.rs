@@ -1,6 +1,7 @@
 //! The one interface every scan matcher implements, and the pieces they share.
 
 use super::kdtree::KdTree;
+use super::quality::{MatchQuality, TrustRule};
 use super::scan::{RangeScan, ScanPoints};
 use crate::geometry::Pose2;
 use std::fmt;
@@ -23,10 +24,17 @@ pub struct MatchResult {
     pub pose: Pose2,
     /// Correspondence searches made (each followed by a minimisation).
     pub iterations: u32,
-    /// Whether the last step was below the convergence thresholds before the iteration cap.
+    /// Whether the answer can be trusted: its [`quality`](Self::quality) passes the
+    /// [`TrustRule`] (a good fit, enough of the scan on the reference's surface, every direction
+    /// pinned down). Set by [`ScanMatcher::align`] for every matcher alike.
     pub converged: bool,
+    /// Whether the matcher's own iterations stopped on a tiny step before their cap (which
+    /// says nothing about being right: a wrong minimum settles too).
+    pub settled: bool,
     /// Correspondences used by the last minimisation.
     pub correspondences: usize,
+    /// How well the answer fits, the figures [`converged`](Self::converged) is decided by.
+    pub quality: MatchQuality,
 }
 
 impl MatchResult {
@@ -36,7 +44,9 @@ impl MatchResult {
             pose: guess,
             iterations: 0,
             converged: false,
+            settled: false,
             correspondences: 0,
+            quality: MatchQuality::NONE,
         }
     }
 }
@@ -79,14 +89,19 @@ pub trait ScanMatcher: Send + Sync + fmt::Debug {
     ///
     /// Any input is answered: an empty scan, or a guess or a point that is not finite or lies
     /// farther than [`MAX_COORDINATE_M`], gives the guess back, not converged, without calling
-    /// [`align_plausible`](Self::align_plausible).
+    /// [`align_plausible`](Self::align_plausible). Every answer's quality is then judged by the
+    /// default [`TrustRule`], which sets [`MatchResult::converged`].
     fn align(&self, reference: &Reference, current: &ScanPoints, guess: Pose2) -> MatchResult {
         let pose_ok = plausible([guess.x, guess.y]) && guess.theta.abs() <= MAX_COORDINATE_M;
         let filled = !reference.points.is_empty() && !current.is_empty();
         if !(pose_ok && filled && reference.points.is_plausible() && current.is_plausible()) {
             return MatchResult::unmatched(guess);
         }
-        self.align_plausible(reference, current, guess)
+        let mut result = self.align_plausible(reference, current, guess);
+        let rule = TrustRule::default();
+        result.quality = rule.assess(reference, &current.xy, &result.pose);
+        result.converged = rule.trusts(&result.quality);
+        result
     }
 
     /// [`align`](Self::align) for inputs known to be non-empty, finite and within

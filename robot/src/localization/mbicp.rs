@@ -205,7 +205,7 @@ impl ScanMatcher for Mbicp {
             r = q_min.compose(&r);
             if self.convergence.reached(&q_min) {
                 result.pose = r.inverse();
-                result.converged = true;
+                result.settled = true;
                 return result;
             }
             if let Some(longest) = self.extrapolate_up_to_m {

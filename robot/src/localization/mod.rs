@@ -23,6 +23,7 @@ mod lorentz;
 mod map;
 mod matcher;
 mod mbicp;
+mod quality;
 mod scan;
 
 pub use icp::LeastSquares;
@@ -35,4 +36,5 @@ pub use matcher::{
     UnknownMatcher, plausible,
 };
 pub use mbicp::Mbicp;
+pub use quality::{MatchQuality, TrustRule, polish};
 pub use scan::{RangeScan, ScanPoints};

@@ -10,7 +10,9 @@
 //! ```
 //!
 //! Ranges are metres; a reading at or beyond the maximum (81.91 m for a SICK in centimetre mode)
-//! is a no-return. An `FLASER` spans 180° from −90°.
+//! is a no-return. A log that declares `PARAM robot_front_laser_max` (the logger's usable range)
+//! has its `FLASER` readings at or beyond that treated as no-returns: the corrected Edmonton log
+//! declares 10 m and fills its no-returns with 51.15 m. An `FLASER` spans 180° from −90°.
 
 use super::{Cursor, LogError, LogEvent, LogFormat, RecordedLog};
 use crate::geometry::Pose2;
@@ -24,6 +26,8 @@ pub const FLASER_RANGE_MAX_M: f64 = 81.9;
 pub(super) fn parse(text: &str, file: &str) -> Result<RecordedLog, LogError> {
     let mut log = RecordedLog::new(LogFormat::Carmen);
     let mut mount_known = false;
+    // The logger's own usable range for the front laser, when it declares one.
+    let mut front_max = FLASER_RANGE_MAX_M;
     for (index, line) in text.lines().enumerate() {
         let at = Cursor {
             file,
@@ -37,12 +41,14 @@ pub(super) fn parse(text: &str, file: &str) -> Result<RecordedLog, LogError> {
                 let ranges = numbers(&at, &mut fields, n, "range")?;
                 let _laser = pose(&at, &mut fields, "x y theta")?;
                 let odom = pose(&at, &mut fields, "odom_x odom_y odom_theta")?;
-                let stamp = stamp(&at, fields.next())?;
+                let Some(stamp) = stamp(&at, fields.next())? else {
+                    log.skip(&format!("{kind} with a negative stamp"));
+                    continue;
+                };
                 let increment = if n > 1 { PI / (n - 1) as f64 } else { 0.0 };
                 log.events.push(LogEvent::Odometry { stamp, pose: odom });
                 log.events.push(LogEvent::Scan(
-                    RangeScan::new(-FRAC_PI_2, increment, FLASER_RANGE_MAX_M, ranges)
-                        .stamped(stamp),
+                    RangeScan::new(-FRAC_PI_2, increment, front_max, ranges).stamped(stamp),
                 ));
             }
             "ROBOTLASER1" => {
@@ -76,7 +82,10 @@ pub(super) fn parse(text: &str, file: &str) -> Result<RecordedLog, LogError> {
                 ] {
                     at.number(fields.next(), what)?;
                 }
-                let stamp = stamp(&at, fields.next())?;
+                let Some(stamp) = stamp(&at, fields.next())? else {
+                    log.skip(&format!("{kind} with a negative stamp"));
+                    continue;
+                };
                 if !mount_known {
                     log.mount = robot.relative(&laser);
                     mount_known = true;
@@ -91,8 +100,19 @@ pub(super) fn parse(text: &str, file: &str) -> Result<RecordedLog, LogError> {
                 for what in ["tv", "rv", "accel"] {
                     at.number(fields.next(), what)?;
                 }
-                let stamp = stamp(&at, fields.next())?;
+                let Some(stamp) = stamp(&at, fields.next())? else {
+                    log.skip(&format!("{kind} with a negative stamp"));
+                    continue;
+                };
                 log.events.push(LogEvent::Odometry { stamp, pose: odom });
+            }
+            "PARAM" if line.split_whitespace().nth(1) == Some("robot_front_laser_max") => {
+                fields.next();
+                let max = at.number(fields.next(), "robot_front_laser_max")?;
+                if max > 0.0 {
+                    front_max = max.min(FLASER_RANGE_MAX_M);
+                }
+                log.skip("PARAM");
             }
             _ if kind.starts_with('#') => log.skip("#"),
             other => log.skip(other),
@@ -130,12 +150,12 @@ fn pose<'a>(
     Ok(Pose2::new(next()?, next()?, next()?))
 }
 
-fn stamp(at: &Cursor<'_>, text: Option<&str>) -> Result<Stamp, LogError> {
+/// The record's stamp, `None` when it is negative: a glitch of the logger (one `ODOM` of the
+/// corrected Freiburg 101 log is stamped −2.88 s between 1077.35 s and 1077.46 s), so the record
+/// is skipped and counted rather than the whole log refused.
+fn stamp(at: &Cursor<'_>, text: Option<&str>) -> Result<Option<Stamp>, LogError> {
     let secs = at.number(text, "ipc_timestamp")?;
-    if secs < 0.0 {
-        return Err(at.error(format!("ipc_timestamp `{secs}` is negative")));
-    }
-    Ok(Stamp::from_secs_f64(secs))
+    Ok((secs >= 0.0).then(|| Stamp::from_secs_f64(secs)))
 }
 
 #[cfg(test)]

@@ -173,14 +173,31 @@ impl Cursor<'_> {
 }
 
 /// Reads a log, choosing the format by extension (`.clf`, `.script`, `.log`) or, failing that,
-/// by the first record.
+/// by the first record; a gzipped log (`.gz`) is unpacked first.
 pub fn read_log(path: &Path) -> Result<RecordedLog, LogError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|source| LogError::Io {
+    let io = |source| LogError::Io {
         file: file.clone(),
         source,
-    })?;
-    let format = match path.extension().and_then(|e| e.to_str()) {
+    };
+    let gzipped = path.extension().is_some_and(|e| e == "gz");
+    let text = if gzipped {
+        use std::io::Read;
+        let mut text = String::new();
+        flate2::read::GzDecoder::new(std::fs::File::open(path).map_err(io)?)
+            .read_to_string(&mut text)
+            .map_err(io)?;
+        text
+    } else {
+        std::fs::read_to_string(path).map_err(io)?
+    };
+    // `name.log.gz` is read as `name.log`.
+    let inner = if gzipped {
+        Path::new(path.file_stem().unwrap_or_default())
+    } else {
+        path
+    };
+    let format = match inner.extension().and_then(|e| e.to_str()) {
         Some("clf") => Some(LogFormat::Carmen),
         Some("script") => Some(LogFormat::Script),
         Some("log") if text.contains("laser-scan:") || text.contains("odometry:") => {

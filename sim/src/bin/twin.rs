@@ -6,6 +6,7 @@
 //! twin map tests/data/mit-csail.clf [--matcher NAME] [--out DIR]
 //! twin match --matcher lorentz < tests/data/pairs.jsonl > results.jsonl
 //! twin pairs out/lab-tour > pairs.jsonl
+//! twin matchers [--pairs 300] [--matchers lorentz,mbicp] [--out DIR]
 //! twin view out/survey-lab [--port P]
 //! twin serve scenarios/lab-tour.toml --base tcp:127.0.0.1:4001 --laser tcp:127.0.0.1:4003
 //! twin drive scenarios/lab-tour.toml --base /dev/ttyUSB0 --laser /dev/ttyUSB2 [--out DIR]
@@ -63,9 +64,14 @@ enum Command {
     /// Match scan pairs read as JSON Lines from stdin, one result line per pair on stdout.
     ///
     /// Input: {"ref": {"angle_min", "angle_increment", "range_max", "ranges": [...]}, "cur": {...},
-    /// "guess": [x, y, theta]}; output: {"x", "y", "theta", "iterations", "converged",
-    /// "correspondences", "micros"}, or {"error": "..."} for a malformed line.
+    /// "guess": [x, y, theta]}; output: {"x", "y", "theta", "iterations", "converged" (the answer
+    /// can be trusted), "settled", "correspondences", "quality": {"inliers", "inlier_share",
+    /// "rms_m", "sigma": [x, y, theta]}, "micros"}, or {"error": "..."} for a malformed line.
     Match(commands::map::MatchArgs),
+    /// Compare the scan matchers on the same pairs — the twin's in four worlds at 0 % and 20 %
+    /// outliers, and the SLAM-corrected real logs — and print success, errors, time and how
+    /// well each answer's `converged` flag predicts success.
+    Matchers(commands::matchers::MatchersArgs),
     /// Write a finished run's consecutive level scans as the pairs `twin match` reads (JSON
     /// Lines on stdout, the guess from odometry): `twin pairs out/lab-tour > pairs.jsonl`.
     Pairs(commands::map::PairsArgs),
@@ -86,6 +92,7 @@ fn main() -> ExitCode {
         Command::Reconstruct(args) => commands::reconstruct::main(args),
         Command::Match(args) => commands::map::match_main(args),
         Command::Pairs(args) => commands::map::pairs_main(args),
+        Command::Matchers(args) => commands::matchers::main(args),
         Command::View(args) => commands::view::main(args),
     };
     match outcome {

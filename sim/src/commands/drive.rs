@@ -94,6 +94,7 @@ where
         let config = MapConfig {
             keyframe_distance_m: settings.map_or(0.0, |s| s.keyframe_distance_m),
             keyframe_angle_rad: settings.map_or(0.0, |s| s.keyframe_angle_rad),
+            require_converged: settings.is_none_or(|s| !s.use_untrusted),
             ..MapConfig::default()
         };
         LevelLocaliser::new(kind, scenario.robot.mount(), config)

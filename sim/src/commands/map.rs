@@ -181,7 +181,10 @@ struct MatchReply {
     theta: f64,
     iterations: u32,
     converged: bool,
+    settled: bool,
     correspondences: usize,
+    /// The figures `converged` is judged by (an infinite σ is written as null).
+    quality: robot::localization::MatchQuality,
     micros: f64,
 }
 
@@ -249,7 +252,9 @@ pub fn match_line(number: usize, line: &str, matcher: &dyn ScanMatcher) -> Strin
         theta: result.pose.theta,
         iterations: result.iterations,
         converged: result.converged,
+        settled: result.settled,
         correspondences: result.correspondences,
+        quality: result.quality,
         micros,
     };
     serde_json::to_string(&reply).unwrap_or_else(|e| error_line(&e.to_string()))
@@ -355,8 +360,10 @@ pub fn map_main(args: MapArgs) -> Result<(), super::CommandError> {
 /// stdout.
 ///
 /// Input: {"ref": {"angle_min", "angle_increment", "range_max", "ranges": [...]}, "cur": {...},
-/// "guess": [x, y, theta]}; output: {"x", "y", "theta", "iterations", "converged",
-/// "correspondences", "micros"}, or {"error": "..."} for a malformed line.
+/// "guess": [x, y, theta]}; output: {"x", "y", "theta", "iterations", "converged" (the answer can
+/// be trusted), "settled" (the iterations stopped on a tiny step), "correspondences", "quality":
+/// {"inliers", "inlier_share", "rms_m", "sigma": [x, y, theta]}, "micros"}, or {"error": "..."}
+/// for a malformed line.
 #[derive(Clone, Debug, clap::Args)]
 pub struct MatchArgs {
     /// The matcher: ls, lorentz, lorentz-lines or mbicp.

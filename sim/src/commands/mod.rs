@@ -6,6 +6,7 @@
 //! - [`serve`]: `twin serve`, the twin's devices byte for byte on TCP ports or pseudo-terminals;
 //! - [`drive`]: `twin drive`, a scenario's script through any backend (the real robot);
 //! - [`reconstruct`]: the 3D model of a run's scenes, and `twin reconstruct` from a run's folder;
+//! - [`matchers`]: `twin matchers`, every scan matcher on the same synthetic and real pairs;
 //! - [`montecarlo`]: `twin montecarlo`, the thesis's Table 5.1 study, parallel, resumable and
 //!   shardable.
 
@@ -23,6 +24,7 @@ macro_rules! say {
 pub mod check;
 pub mod drive;
 pub mod map;
+pub mod matchers;
 pub mod montecarlo;
 pub mod reconstruct;
 pub mod run;
@@ -163,6 +165,9 @@ pub enum CommandError {
     /// A run's folder cannot be reconstructed.
     #[error(transparent)]
     RunFolder(#[from] reconstruct::FolderError),
+    /// Scan pairs for comparing the matchers cannot be made.
+    #[error("making scan pairs: {0}")]
+    Pairs(String),
     /// A drive through the serial backend failed.
     #[error(transparent)]
     Drive(#[from] drive::DriveError<robot::serial::SerialError>),

@@ -80,6 +80,7 @@ pub fn run_scenario(
         let config = MapConfig {
             keyframe_distance_m: settings.keyframe_distance_m,
             keyframe_angle_rad: settings.keyframe_angle_rad,
+            require_converged: !settings.use_untrusted,
             ..MapConfig::default()
         };
         LevelLocaliser::new(settings.matcher, scenario.robot.mount(), config)

@@ -38,6 +38,7 @@
 //! matcher = "lorentz"                   # ls, lorentz, lorentz-lines or mbicp
 //! keyframe_distance_m = 0.0             # match each scan to the last one moved this far from
 //! keyframe_angle_deg = 0.0              # (0: to the previous scan, as the thesis does)
+//! use_untrusted = false                 # true: use every match, even one not flagged converged
 //! ```
 
 use super::checks::{Check, CheckFile, parse_checks};
@@ -116,6 +117,9 @@ pub struct LocalisationSettings {
     pub keyframe_distance_m: f64,
     /// … or this much turn, radians (0: every scan).
     pub keyframe_angle_rad: f64,
+    /// Use every match, as the thesis did, even one whose quality is not trusted (by default
+    /// such a match falls back to odometry and is counted).
+    pub use_untrusted: bool,
 }
 
 /// How a run's 3D scenes are meshed and scored (`[reconstruction]`).
@@ -303,6 +307,7 @@ impl Scenario {
                 })?,
                 keyframe_distance_m: l.keyframe_distance_m.map_or(0.0, NonNegative::get),
                 keyframe_angle_rad: l.keyframe_angle_deg.map_or(0.0, |a| a.get().to_radians()),
+                use_untrusted: l.use_untrusted.unwrap_or(false),
             }),
         };
         let reconstruction = match &file.reconstruction {
@@ -428,6 +433,7 @@ struct LocalisationFile {
     matcher: Spanned<String>,
     keyframe_distance_m: Option<NonNegative>,
     keyframe_angle_deg: Option<NonNegative>,
+    use_untrusted: Option<bool>,
 }
 
 #[derive(Deserialize)]

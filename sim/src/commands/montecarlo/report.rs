@@ -89,8 +89,14 @@ pub struct CellStats {
     pub max_e_t_mm: f64,
     /// Share of trials within 1° and 10 mm.
     pub within_1deg_10mm: f64,
-    /// Share of trials that converged before the iteration cap.
+    /// Share of trials whose match was flagged `converged` (trusted: its quality passed the
+    /// matcher's trust rule).
     pub converged: f64,
+    /// Mean translation error of the pose used when a match not trusted falls back to the
+    /// odometry guess, as the map builder does, millimetres.
+    pub fallback_mean_e_t_mm: f64,
+    /// Share of trials within 1° and 10 mm with that fallback.
+    pub fallback_within_1deg_10mm: f64,
     /// Mean iterations.
     pub mean_iterations: f64,
 }
@@ -158,6 +164,20 @@ impl Summary {
                     .zip(&t)
                     .filter(|(a, b)| **a <= 1.0 && **b <= 10.0);
                 let within_1deg_10mm = within.count() as f64 / n;
+                // The pose a user of the flag keeps: the match when trusted, else the guess.
+                let used: Vec<(f64, f64)> = rows
+                    .iter()
+                    .map(|r| {
+                        if is_guess || r.converged {
+                            pick(r)
+                        } else {
+                            (r.guess_e_theta_deg, r.guess_e_t_mm)
+                        }
+                    })
+                    .collect();
+                let fallback_mean_e_t_mm = used.iter().map(|u| u.1).sum::<f64>() / n;
+                let fallback_within_1deg_10mm =
+                    used.iter().filter(|u| u.0 <= 1.0 && u.1 <= 10.0).count() as f64 / n;
                 let (converged, mean_iterations) = if is_guess {
                     (1.0, 0.0)
                 } else {
@@ -182,6 +202,8 @@ impl Summary {
                     max_e_t_mm,
                     within_1deg_10mm,
                     converged,
+                    fallback_mean_e_t_mm,
+                    fallback_within_1deg_10mm,
                     mean_iterations,
                 });
             }
@@ -200,13 +222,13 @@ impl Summary {
         let mut s = String::new();
         let _ = writeln!(
             s,
-            "| method | outliers | trials | mean e_θ (°) | sd e_θ (°) | max e_θ (°) | mean e_t (mm) | sd e_t (mm) | max e_t (mm) | within 1° and 10 mm |"
+            "| method | outliers | trials | mean e_θ (°) | sd e_θ (°) | max e_θ (°) | mean e_t (mm) | sd e_t (mm) | max e_t (mm) | within 1° and 10 mm | trusted | with fallback: mean e_t (mm), within 1° and 10 mm |"
         );
-        let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|");
+        let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|---|");
         for c in &self.cells {
             let _ = writeln!(
                 s,
-                "| {} | {} % | {} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.2} | {:.1} % |",
+                "| {} | {} % | {} | {:.3} | {:.3} | {:.3} | {:.2} | {:.2} | {:.2} | {:.1} % | {:.1} % | {:.2}, {:.1} % |",
                 c.matcher,
                 format_rate(c.rate),
                 c.trials,
@@ -216,7 +238,10 @@ impl Summary {
                 c.mean_e_t_mm,
                 c.sd_e_t_mm,
                 c.max_e_t_mm,
-                100.0 * c.within_1deg_10mm
+                100.0 * c.within_1deg_10mm,
+                100.0 * c.converged,
+                c.fallback_mean_e_t_mm,
+                100.0 * c.fallback_within_1deg_10mm,
             );
         }
         s

@@ -1,0 +1,474 @@
+//! `twin matchers`: every scan matcher on the same pairs, synthetic and real, in one table —
+//! success, median and 95th-percentile errors, median time, and how well each answer's
+//! `converged` flag predicts its success (precision and recall).
+//!
+//! - **synthetic** pairs: the twin's SICK from two poses a short drive apart (up to ±30 cm and
+//!   ±20°) in four worlds in turn (the lab, the orthogonal room, the glass-door room and the lab
+//!   with 30 boxes), at 0 % and 20 % uniform outliers; the guess is the truth moved by Gaussian errors
+//!   of σ 5 cm and 2°; success is within 5 cm and 1°;
+//! - **real** pairs: consecutive scans of the SLAM-corrected CARMEN logs in
+//!   `tests/data/corrected/` (Belgioioso castle, Freiburg building 101, Edmonton convention
+//!   centre), whose corrected poses give the truth to about 2 cm; the guess is the truth moved by
+//!   σ 5 cm and 2°, and in a last row by σ 20 cm and 10°; success is within 10 cm and 2°.
+//!
+//! Everything but the times is the same on every run and machine for a given seed.
+
+use super::CommandError;
+use crate::commands::montecarlo::pairs::PairMaker;
+use crate::config::{Outliers, RobotDescription, WorldDescription};
+use crate::rng::{self, SimRng};
+use rand::RngExt;
+use rand_distr::{Distribution, StandardNormal};
+use robot::Pose2;
+use robot::localization::{MatchResult, MatcherKind, RangeScan, Reference};
+use robot::logs::LogEvent;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// One pair with its truth and the guess a matcher starts from.
+#[derive(Clone, Debug)]
+pub struct Case {
+    /// The reference scan.
+    pub reference: RangeScan,
+    /// The current scan.
+    pub current: RangeScan,
+    /// The current laser frame in the reference laser frame.
+    pub truth: Pose2,
+    /// Where the matcher starts.
+    pub guess: Pose2,
+}
+
+/// Pairs of one kind, and when a match of them counts as a success.
+#[derive(Clone, Debug)]
+pub struct CaseSet {
+    /// The row's name.
+    pub name: String,
+    /// The pairs.
+    pub cases: Vec<Case>,
+    /// A match within this distance of the truth, metres …
+    pub tolerance_m: f64,
+    /// … and this angle, radians, is a success.
+    pub tolerance_rad: f64,
+}
+
+/// The guess's errors: Gaussian with these standard deviations (metres on each axis, radians).
+#[derive(Copy, Clone, Debug)]
+pub struct GuessError {
+    /// σ of x and of y, metres.
+    pub sigma_m: f64,
+    /// σ of θ, radians.
+    pub sigma_rad: f64,
+}
+
+impl GuessError {
+    /// The truth moved by a draw of the errors.
+    fn guess(&self, truth: Pose2, rng: &mut SimRng) -> Pose2 {
+        let mut n = || -> f64 { StandardNormal.sample(rng) };
+        let (dx, dy, dt) = (n(), n(), n());
+        Pose2::new(
+            truth.x + self.sigma_m * dx,
+            truth.y + self.sigma_m * dy,
+            truth.theta + self.sigma_rad * dt,
+        )
+    }
+}
+
+/// `n` synthetic pairs with uniform outliers at `outlier_rate`, the worlds taken in turn.
+pub fn synthetic_set(
+    name: &str,
+    worlds: &[WorldDescription],
+    robot: &RobotDescription,
+    outlier_rate: f64,
+    n: usize,
+    error: GuessError,
+    seed: u64,
+) -> Result<CaseSet, CommandError> {
+    let outliers = Outliers {
+        uniform: outlier_rate,
+        ..Outliers::NONE
+    };
+    let makers: Vec<PairMaker> = worlds
+        .iter()
+        .map(|w| PairMaker::new(w, robot, outliers))
+        .collect();
+    let stream = rng::stream_seed(seed, &format!("matchers/{name}"));
+    let cases = (0..n)
+        .map(|k| {
+            let (maker, world) = (&makers[k % makers.len()], &worlds[k % worlds.len()]);
+            let mut rng = rng::substream(stream, k as u64);
+            let start = maker
+                .free_pose(0.4, &mut rng)
+                .map_err(|why| CommandError::Pairs(format!("{}: {why}", world.name)))?;
+            let u = |rng: &mut SimRng| 2.0 * rng.random::<f64>() - 1.0;
+            let motion = Pose2::new(
+                0.3 * u(&mut rng),
+                0.05 * u(&mut rng),
+                20f64.to_radians() * u(&mut rng),
+            );
+            let pair = maker.pair(start, start.compose(&motion), &mut rng);
+            Ok(Case {
+                guess: error.guess(pair.truth, &mut rng),
+                reference: pair.reference,
+                current: pair.current,
+                truth: pair.truth,
+            })
+        })
+        .collect::<Result<_, CommandError>>()?;
+    Ok(CaseSet {
+        name: name.to_string(),
+        cases,
+        tolerance_m: 0.05,
+        tolerance_rad: 1f64.to_radians(),
+    })
+}
+
+/// Up to `n` consecutive pairs of a SLAM-corrected CARMEN log, whose scans' poses are the truth.
+pub fn log_set(
+    name: &str,
+    log: &Path,
+    n: usize,
+    error: GuessError,
+    seed: u64,
+) -> Result<CaseSet, CommandError> {
+    let recorded = robot::logs::read_log(log)?;
+    // Each FLASER's pose is recorded just before its scan.
+    let mut scans: Vec<(RangeScan, Pose2)> = Vec::new();
+    let mut pose = None;
+    for event in recorded.events {
+        match event {
+            LogEvent::Odometry { pose: p, .. } => pose = Some(p),
+            LogEvent::Scan(scan) => {
+                if let Some(p) = pose {
+                    scans.push((scan, p));
+                }
+            }
+            LogEvent::Points { .. } => {}
+        }
+    }
+    let stream = rng::stream_seed(seed, &format!("matchers/{name}"));
+    let cases = scans
+        .windows(2)
+        .take(n)
+        .enumerate()
+        .map(|(k, w)| {
+            let mut rng = rng::substream(stream, k as u64);
+            let truth = w[0].1.relative(&w[1].1);
+            Case {
+                reference: w[0].0.clone(),
+                current: w[1].0.clone(),
+                truth,
+                guess: error.guess(truth, &mut rng),
+            }
+        })
+        .collect();
+    Ok(CaseSet {
+        name: name.to_string(),
+        cases,
+        tolerance_m: 0.10,
+        tolerance_rad: 2f64.to_radians(),
+    })
+}
+
+/// How one matcher did on one set.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Row {
+    /// The set's name.
+    pub set: String,
+    /// The matcher.
+    pub matcher: MatcherKind,
+    /// Pairs matched.
+    pub pairs: usize,
+    /// Share of pairs matched within the tolerance.
+    pub success: f64,
+    /// Median and 95th percentile of the translation error, metres.
+    pub error_m: [f64; 2],
+    /// Median and 95th percentile of the rotation error, radians.
+    pub error_rad: [f64; 2],
+    /// Median time per pair (preparing the reference included), microseconds.
+    pub median_us: f64,
+    /// Share of pairs flagged `converged`.
+    pub flagged: f64,
+    /// Of the flagged pairs, the share that succeeded (1 when none is flagged).
+    pub flag_precision: f64,
+    /// Of the successful pairs, the share flagged (1 when none succeeded).
+    pub flag_recall: f64,
+}
+
+/// One match of one pair: what `pairs.csv` lists.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// The set's name.
+    pub set: String,
+    /// The pair's number in its set.
+    pub pair: usize,
+    /// The matcher.
+    pub matcher: MatcherKind,
+    /// Translation and rotation errors, metres and radians.
+    pub error: (f64, f64),
+    /// Whether it was within the set's tolerance.
+    pub success: bool,
+    /// What the matcher answered.
+    pub result: MatchResult,
+}
+
+/// The header of `pairs.csv`.
+pub const OUTCOMES_HEADER: &str = "set,pair,matcher,success,error_mm,error_deg,converged,settled,iterations,inliers,inlier_share,rms_mm,sigma_x_mm,sigma_y_mm,sigma_theta_deg,step_mm,step_deg";
+
+impl Outcome {
+    /// The outcome as a line of `pairs.csv`.
+    pub fn csv(&self) -> String {
+        let q = &self.result.quality;
+        format!(
+            "\"{}\",{},{},{},{:.2},{:.3},{},{},{},{},{:.4},{:.2},{:.2},{:.2},{:.3},{:.2},{:.3}",
+            self.set,
+            self.pair,
+            self.matcher,
+            u8::from(self.success),
+            self.error.0 * 1e3,
+            self.error.1.to_degrees(),
+            u8::from(self.result.converged),
+            u8::from(self.result.settled),
+            self.result.iterations,
+            q.inliers,
+            q.inlier_share,
+            q.rms_m * 1e3,
+            q.sigma[0] * 1e3,
+            q.sigma[1] * 1e3,
+            q.sigma[2].to_degrees(),
+            q.step[0] * 1e3,
+            q.step[1].to_degrees(),
+        )
+    }
+}
+
+/// Every matcher of `kinds` on every pair of `set`, one after the other on this thread; each
+/// match's outcome goes to `record`.
+pub fn evaluate(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Outcome)) -> Vec<Row> {
+    kinds
+        .iter()
+        .map(|&kind| {
+            let matcher = kind.build();
+            let mut errors_m = Vec::with_capacity(set.cases.len());
+            let mut errors_rad = Vec::with_capacity(set.cases.len());
+            let mut micros = Vec::with_capacity(set.cases.len());
+            let (mut success, mut flagged, mut both) = (0usize, 0usize, 0usize);
+            for (pair, case) in set.cases.iter().enumerate() {
+                let clock = Instant::now();
+                let reference = Reference::new(case.reference.points());
+                let result = matcher.align(&reference, &case.current.points(), case.guess);
+                micros.push(clock.elapsed().as_secs_f64() * 1e6);
+                let off = case.truth.relative(&result.pose);
+                let (em, er) = (off.x.hypot(off.y), off.theta.abs());
+                let ok = em <= set.tolerance_m && er <= set.tolerance_rad;
+                success += usize::from(ok);
+                flagged += usize::from(result.converged);
+                both += usize::from(ok && result.converged);
+                errors_m.push(em);
+                errors_rad.push(er);
+                record(Outcome {
+                    set: set.name.clone(),
+                    pair,
+                    matcher: kind,
+                    error: (em, er),
+                    success: ok,
+                    result,
+                });
+            }
+            let n = set.cases.len().max(1) as f64;
+            let share = |a: usize, b: usize| if b == 0 { 1.0 } else { a as f64 / b as f64 };
+            Row {
+                set: set.name.clone(),
+                matcher: kind,
+                pairs: set.cases.len(),
+                success: success as f64 / n,
+                error_m: [quantile(&mut errors_m, 0.5), quantile(&mut errors_m, 0.95)],
+                error_rad: [
+                    quantile(&mut errors_rad, 0.5),
+                    quantile(&mut errors_rad, 0.95),
+                ],
+                median_us: quantile(&mut micros, 0.5),
+                flagged: flagged as f64 / n,
+                flag_precision: share(both, flagged),
+                flag_recall: share(both, success),
+            }
+        })
+        .collect()
+}
+
+/// The `q` quantile of `values` (nearest rank; 0 for none).
+fn quantile(values: &mut [f64], q: f64) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    values.sort_by(f64::total_cmp);
+    let rank = ((q * values.len() as f64).ceil() as usize).clamp(1, values.len());
+    values[rank - 1]
+}
+
+/// The rows as a Markdown table, with each matcher's time as a ratio to the first matcher's in
+/// the same set (the same run, so the ratio travels between machines).
+pub fn table(rows: &[Row]) -> String {
+    let mut out = String::from(
+        "| pairs | matcher | success | median / p95 error | median time | × first | flagged | flag precision / recall |\n|---|---|---|---|---|---|---|---|\n",
+    );
+    let mut first_us = f64::NAN;
+    let mut last_set = "";
+    for r in rows {
+        if r.set != last_set {
+            first_us = r.median_us;
+            last_set = &r.set;
+        }
+        out.push_str(&format!(
+            "| {} ({}) | {} | {:.3} | {:.1} / {:.1} mm, {:.2} / {:.2}° | {:.2} ms | {:.2} | {:.3} | {:.3} / {:.3} |\n",
+            r.set,
+            r.pairs,
+            r.matcher,
+            r.success,
+            r.error_m[0] * 1e3,
+            r.error_m[1] * 1e3,
+            r.error_rad[0].to_degrees(),
+            r.error_rad[1].to_degrees(),
+            r.median_us / 1e3,
+            r.median_us / first_us,
+            r.flagged,
+            r.flag_precision,
+            r.flag_recall,
+        ));
+    }
+    out
+}
+
+/// The standard sets: synthetic at 0 % and 20 % outliers, each corrected log, and the large
+/// guess over the three logs; `n` pairs each (a log gives at most its scans less one).
+pub fn standard_sets(root: &Path, n: usize, seed: u64) -> Result<Vec<CaseSet>, CommandError> {
+    let load = |p: &str| WorldDescription::load(root.join(p));
+    let lab_text = std::fs::read_to_string(root.join("worlds/lab.toml")).map_err(|source| {
+        CommandError::Read {
+            path: root.join("worlds/lab.toml"),
+            source,
+        }
+    })?;
+    let worlds = vec![
+        load("worlds/lab.toml")?,
+        load("worlds/orthogonal.toml")?,
+        load("worlds/glass-door.toml")?,
+        WorldDescription::parse(
+            &crate::world::clutter::lab_with_boxes(&lab_text, 30),
+            "lab with 30 boxes",
+        )?,
+    ];
+    let robot = RobotDescription::load(root.join("scenarios/robots/pioneer-3dx.toml"))?;
+    let small = GuessError {
+        sigma_m: 0.05,
+        sigma_rad: 2f64.to_radians(),
+    };
+    let large = GuessError {
+        sigma_m: 0.20,
+        sigma_rad: 10f64.to_radians(),
+    };
+    let logs = ["belgioioso", "freiburg-101", "edmonton"];
+    let log = |name: &str| -> PathBuf {
+        root.join(format!("tests/data/corrected/{name}-corrected.log.gz"))
+    };
+    let mut sets = vec![
+        synthetic_set("synthetic, 0 %", &worlds, &robot, 0.0, n, small, seed)?,
+        synthetic_set("synthetic, 20 %", &worlds, &robot, 0.2, n, small, seed)?,
+    ];
+    for name in logs {
+        sets.push(log_set(
+            &format!("real, {name}"),
+            &log(name),
+            n,
+            small,
+            seed,
+        )?);
+    }
+    let mut pooled = CaseSet {
+        name: "real, guess σ 20 cm / 10°".to_string(),
+        cases: Vec::new(),
+        tolerance_m: 0.10,
+        tolerance_rad: 2f64.to_radians(),
+    };
+    for name in logs {
+        let set = log_set(
+            &format!("large/{name}"),
+            &log(name),
+            n.div_ceil(3),
+            large,
+            seed,
+        )?;
+        pooled.cases.extend(set.cases);
+    }
+    sets.push(pooled);
+    Ok(sets)
+}
+
+/// Arguments of `twin matchers`.
+#[derive(clap::Args, Debug)]
+pub struct MatchersArgs {
+    /// Pairs per row.
+    #[arg(long, default_value_t = 300)]
+    pub pairs: usize,
+    /// Seed of the pairs and guesses.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Matchers to compare (comma-separated); all by default.
+    #[arg(long, value_delimiter = ',')]
+    pub matchers: Vec<MatcherKind>,
+    /// The repository's folder, holding `worlds/`, `scenarios/robots/` and `tests/data/corrected/`.
+    #[arg(long, default_value = ".")]
+    pub root: PathBuf,
+    /// Write `matchers.json` (every row's figures) and `pairs.csv` (every match: errors, flag,
+    /// quality figures) into this folder too.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// `twin matchers`: the table on standard output.
+pub fn main(args: MatchersArgs) -> Result<(), CommandError> {
+    if args.pairs == 0 || args.pairs > 100_000 {
+        return Err(CommandError::option(
+            "--pairs",
+            "must be between 1 and 100000",
+            args.pairs,
+        ));
+    }
+    let kinds = if args.matchers.is_empty() {
+        MatcherKind::ALL.to_vec()
+    } else {
+        args.matchers.clone()
+    };
+    let sets = standard_sets(&args.root, args.pairs, args.seed)?;
+    let total: usize = sets.iter().map(|s| s.cases.len() * kinds.len()).sum();
+    let bar = super::bar(
+        args.quiet,
+        total as u64,
+        "{spinner} matching [{bar:30}] {pos}/{len} pairs {rate} {eta}",
+    );
+    let mut lines = vec![OUTCOMES_HEADER.to_string()];
+    let rows: Vec<Row> = sets
+        .iter()
+        .flat_map(|set| {
+            evaluate(set, &kinds, &mut |outcome| {
+                bar.inc(1);
+                lines.push(outcome.csv());
+            })
+        })
+        .collect();
+    bar.finish_and_clear();
+    say!("{}", table(&rows));
+    if let Some(dir) = &args.out {
+        let write = |source| CommandError::Write {
+            dir: dir.clone(),
+            source,
+        };
+        std::fs::create_dir_all(dir).map_err(write)?;
+        let json = serde_json::to_string_pretty(&rows).expect("rows serialise");
+        std::fs::write(dir.join("matchers.json"), json + "\n").map_err(write)?;
+        std::fs::write(dir.join("pairs.csv"), lines.join("\n") + "\n").map_err(write)?;
+    }
+    Ok(())
+}
