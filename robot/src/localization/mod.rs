@@ -15,6 +15,7 @@
 //! matches into a trajectory and a point map (§3.5), with odometry queued and interpolated to
 //! each scan's stamp (002 §7.3.3). Everything is in metres and radians, in REP-103 axes.
 
+mod grid;
 mod icp;
 mod kdtree;
 mod level;
@@ -26,6 +27,7 @@ mod mbicp;
 mod quality;
 mod scan;
 
+pub use grid::{Cell, GridConfig, OccupancyGrid};
 pub use icp::LeastSquares;
 pub use kdtree::KdTree;
 pub use level::{LEVEL_TOLERANCE_RAD, LevelLocaliser};

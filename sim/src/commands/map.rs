@@ -23,6 +23,10 @@ pub struct Replay {
     pub map: Vec<[f64; 2]>,
     /// The same scans placed by odometry alone.
     pub odometry_map: Vec<[f64; 2]>,
+    /// Each placed scan's ranges (`None` for a log of points).
+    pub scans: Vec<Option<RangeScan>>,
+    /// The laser's pose on the base.
+    pub mount: Pose2,
     /// Wall-clock seconds spent in the map builder.
     pub wall_seconds: f64,
 }
@@ -42,6 +46,7 @@ pub fn replay_log(
     let mut wall = 0.0;
     let total = log.events.len();
     let mut scans: Vec<robot::localization::ScanPoints> = Vec::new();
+    let mut ranges: Vec<Option<RangeScan>> = Vec::new();
     for (i, event) in log.events.iter().enumerate() {
         let clock = Instant::now();
         match event {
@@ -50,9 +55,11 @@ pub fn replay_log(
                 let points = scan.points();
                 builder.push_points(scan.stamp, points.clone());
                 scans.push(points);
+                ranges.push(Some(scan.clone()));
             }
             LogEvent::Points { stamp, points } => {
                 scans.push(points.clone());
+                ranges.push(None);
                 builder.push_points(*stamp, points.clone());
             }
         }
@@ -88,6 +95,8 @@ pub fn replay_log(
         placed,
         map: builder.map_points().to_vec(),
         odometry_map,
+        scans: ranges,
+        mount: log.mount,
         wall_seconds: wall,
     }
 }
@@ -159,7 +168,14 @@ impl Replay {
         let mut text = serde_json::to_string_pretty(summary)?;
         text.push('\n');
         std::fs::write(&files[3], text)?;
-        Ok(files.to_vec())
+        let placed = self
+            .placed
+            .iter()
+            .zip(&self.scans)
+            .filter_map(|(p, scan)| Some((p.estimate.compose(&self.mount), scan.as_ref()?)));
+        let mut files = files.to_vec();
+        files.extend(crate::output::write_grid(dir, placed)?);
+        Ok(files)
     }
 }
 

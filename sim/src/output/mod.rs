@@ -7,6 +7,7 @@
 //! bytes.
 
 pub mod figure;
+mod grid;
 pub mod logmap;
 mod ply;
 mod reconstruction;
@@ -20,6 +21,7 @@ mod tum;
 mod world_json;
 pub use world_json::write_world_json;
 
+pub use grid::write_grid;
 pub use ply::write_ply;
 pub use reconstruction::{
     ReconstructionFile, THESIS_QUADS, THESIS_TRIANGLES, reconstruction_file, reconstruction_report,
@@ -32,6 +34,35 @@ pub use summary::{LocalisationSummary, Summary, estimate_errors};
 pub use svg::write_map_svg;
 pub use tilted::{last_tilted, write_tilted_svg};
 pub use tum::{read_tum, write_tum};
+
+/// A run's level scans with the laser's pose in the world when each was taken: by the
+/// scan-matching estimate when the run localises, else by odometry (scenes' and tilted scans,
+/// which see the floor, are left out).
+fn level_scans(record: &RunRecord, scenario: &Scenario) -> Vec<(robot::Pose2, RangeScan)> {
+    let mount = scenario.robot.mount();
+    let laser =
+        |s: &crate::record::ScanRecord| mount.laser_on_base(s.scan.head).map(|l| l.planar());
+    match &record.localisation {
+        Some(loc) => loc
+            .placed
+            .iter()
+            .filter_map(|p| {
+                let i = record
+                    .scans
+                    .binary_search_by_key(&p.stamp, |s| s.scan.stamp)
+                    .ok()?;
+                let s = &record.scans[i];
+                Some((p.estimate.compose(&laser(s)?), RangeScan::from(&s.scan)))
+            })
+            .collect(),
+        None => record
+            .scans
+            .iter()
+            .filter(|s| s.scene.is_none() && s.frame.tilt.abs() < 1e-9)
+            .filter_map(|s| Some((s.odometry.compose(&laser(s)?), RangeScan::from(&s.scan))))
+            .collect(),
+    }
+}
 
 /// Why a file a run wrote cannot be read back.
 #[derive(Debug, thiserror::Error)]
@@ -77,6 +108,7 @@ impl ReadError {
 
 use crate::config::Scenario;
 use crate::record::RunRecord;
+use robot::localization::RangeScan;
 use std::path::{Path, PathBuf};
 
 /// Where each output file went.
@@ -130,6 +162,10 @@ pub fn write_all(record: &RunRecord, scenario: &Scenario, dir: &Path) -> std::io
             &record.scenario,
         )?;
     }
+    files.extend(write_grid(
+        dir,
+        level_scans(record, scenario).iter().map(|(p, s)| (*p, s)),
+    )?);
     if let Some(recon) = &record.reconstruction {
         files.extend(write_reconstruction(
             dir,

@@ -1,0 +1,183 @@
+//! Issue 19, maps out: every run and every `twin map` writes its occupancy grid as `map.pgm` +
+//! `map.yaml` in the ROS `map_server` convention, from the estimate's scans with free space
+//! traced along each beam. Read back here by a reader written from the convention (not from the
+//! writer): the header, the values, the origin; and held against the world's true walls.
+
+use crate::common::{repo, scenario};
+use sim::world::WorldMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("twin-issue-19-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+/// A `map.yaml` + `map.pgm` as `map_server` reads them.
+struct RosMap {
+    resolution: f64,
+    origin: [f64; 3],
+    width: usize,
+    height: usize,
+    /// Row by row, top (largest y) first.
+    pixels: Vec<u8>,
+}
+
+impl RosMap {
+    fn read(dir: &Path) -> RosMap {
+        let yaml = std::fs::read_to_string(dir.join("map.yaml")).expect("map.yaml");
+        let field = |name: &str| -> String {
+            yaml.lines()
+                .find_map(|l| l.strip_prefix(&format!("{name}:")))
+                .unwrap_or_else(|| panic!("map.yaml has no {name}: {yaml}"))
+                .trim()
+                .to_string()
+        };
+        assert_eq!(field("image"), "map.pgm");
+        assert_eq!(field("negate"), "0");
+        let thresholds = (
+            field("occupied_thresh").parse::<f64>().unwrap(),
+            field("free_thresh").parse::<f64>().unwrap(),
+        );
+        assert!(thresholds.0 > thresholds.1 && thresholds.0 < 1.0 && thresholds.1 > 0.0);
+        let origin: Vec<f64> = field("origin")
+            .trim_matches(|c| c == '[' || c == ']')
+            .split(',')
+            .map(|v| v.trim().parse().unwrap())
+            .collect();
+        let pgm = std::fs::read(dir.join("map.pgm")).expect("map.pgm");
+        // P5, then width, height and maxval, with comments, then one whitespace byte.
+        let mut tokens = Vec::new();
+        let mut i = 0;
+        while tokens.len() < 4 {
+            while pgm[i].is_ascii_whitespace() {
+                i += 1;
+            }
+            if pgm[i] == b'#' {
+                while pgm[i] != b'\n' {
+                    i += 1;
+                }
+                continue;
+            }
+            let start = i;
+            while !pgm[i].is_ascii_whitespace() {
+                i += 1;
+            }
+            tokens.push(String::from_utf8(pgm[start..i].to_vec()).unwrap());
+        }
+        assert_eq!(tokens[0], "P5");
+        assert_eq!(tokens[3], "255");
+        let (width, height) = (tokens[1].parse().unwrap(), tokens[2].parse().unwrap());
+        let pixels = pgm[i + 1..].to_vec();
+        assert_eq!(pixels.len(), width * height, "one byte per cell");
+        RosMap {
+            resolution: field("resolution").parse().unwrap(),
+            origin: [origin[0], origin[1], origin[2]],
+            width,
+            height,
+            pixels,
+        }
+    }
+
+    /// The centre of cell (column, row from the top), map frame.
+    fn centre(&self, column: usize, row: usize) -> [f64; 2] {
+        let r = self.resolution;
+        [
+            self.origin[0] + (column as f64 + 0.5) * r,
+            self.origin[1] + ((self.height - 1 - row) as f64 + 0.5) * r,
+        ]
+    }
+
+    fn pixel_at(&self, p: [f64; 2]) -> u8 {
+        let column = ((p[0] - self.origin[0]) / self.resolution).floor() as usize;
+        let up = ((p[1] - self.origin[1]) / self.resolution).floor() as usize;
+        self.pixels[(self.height - 1 - up) * self.width + column]
+    }
+}
+
+/// The lab tour's grid: trinary values only, the start free, and what it calls occupied inside
+/// the building lies on the lab's true walls (the estimate is a decimetre off at worst on this
+/// tour).
+#[test]
+fn a_run_writes_a_ros_map_of_what_it_saw() {
+    let dir = scratch("lab-tour");
+    let out = Command::new(env!("CARGO_BIN_EXE_twin"))
+        .args(["run", "scenarios/lab-tour.toml", "--quiet", "--out"])
+        .arg(&dir)
+        .current_dir(repo())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let map = RosMap::read(&dir);
+    assert_eq!(map.resolution, 0.05);
+    assert_eq!(map.origin[2], 0.0);
+    assert!(map.pixels.iter().all(|&v| v == 0 || v == 205 || v == 254));
+    let lab = scenario("lab-tour");
+    let world = WorldMap::new(&lab.world);
+    let start = [lab.world.start.x, lab.world.start.y];
+    assert_eq!(map.pixel_at(start), 254, "the start is free");
+    // Beyond the building the laser sees mirror images through its glass (the twin's optics,
+    // as the real laser's): those cells are what the laser reported, not walls, and are left out.
+    let (lo, hi) = lab.world.bounds();
+    let inside = |p: [f64; 2]| p[0] >= lo[0] && p[0] <= hi[0] && p[1] >= lo[1] && p[1] <= hi[1];
+    let (mut occupied, mut on_walls, mut free) = (0, 0, 0);
+    for row in 0..map.height {
+        for column in 0..map.width {
+            let v = map.pixels[row * map.width + column];
+            let centre = map.centre(column, row);
+            if !inside(centre) {
+                continue;
+            }
+            let clearance = world.clearance(centre);
+            if v == 0 {
+                occupied += 1;
+                on_walls += usize::from(clearance <= 0.2);
+            } else if v == 254 {
+                free += 1;
+            }
+        }
+    }
+    assert!(
+        occupied > 500 && free > 10 * occupied,
+        "{occupied} occupied, {free} free"
+    );
+    assert!(
+        on_walls as f64 >= 0.9 * occupied as f64,
+        "{on_walls} of {occupied} occupied cells lie within 20 cm of a wall"
+    );
+}
+
+/// `twin map` writes the grid of a real log too.
+#[test]
+fn a_log_map_writes_a_ros_map() {
+    let dir = scratch("mit");
+    let out = Command::new(env!("CARGO_BIN_EXE_twin"))
+        .args([
+            "map",
+            "tests/data/corrected/belgioioso-corrected.log.gz",
+            "--out",
+        ])
+        .arg(&dir)
+        .current_dir(repo())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let map = RosMap::read(&dir);
+    let occupied = map.pixels.iter().filter(|&&v| v == 0).count();
+    let free = map.pixels.iter().filter(|&&v| v == 254).count();
+    assert!(
+        occupied > 1000 && free > occupied,
+        "{occupied} occupied, {free} free"
+    );
+    // The first scan's base is the map's origin: free (a point inside a cell, not on a corner).
+    assert_eq!(map.pixel_at([0.012, 0.013]), 254);
+}
