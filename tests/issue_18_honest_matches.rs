@@ -71,13 +71,10 @@ fn least_squares_no_longer_claims_its_wrong_answers() {
     }
 }
 
-/// A wall seen straight ahead from `distance`, 181 beams over 180°.
-fn wall(distance: f64) -> RangeScan {
+/// A scan of 181 beams over 180°, beam `a` (radians from straight ahead) reading `range(a)`.
+fn scan_of(mut range: impl FnMut(f64) -> f64) -> RangeScan {
     let ranges = (0..181)
-        .map(|i| {
-            let a = (f64::from(i) - 90.0).to_radians();
-            (distance / a.cos().max(0.05)).min(30.0)
-        })
+        .map(|i| range((f64::from(i) - 90.0).to_radians()))
         .collect();
     RangeScan::new(
         -std::f64::consts::FRAC_PI_2,
@@ -87,31 +84,26 @@ fn wall(distance: f64) -> RangeScan {
     )
 }
 
-/// A room's corner: the reference for a match that can be trusted.
+/// A wall seen straight ahead from `distance`.
+fn wall(distance: f64) -> RangeScan {
+    scan_of(|a| (distance / a.cos().max(0.05)).min(30.0))
+}
+
+/// A room's corner: a wall ahead at 3 − `dx` metres and one to the left at 2.
 fn corner(dx: f64) -> RangeScan {
-    let ranges = (0..181)
-        .map(|i| {
-            let a = (f64::from(i) - 90.0).to_radians();
-            // A wall ahead at 3 − dx and one to the left at 2.
-            let ahead = if a.cos() > 1e-9 {
-                (3.0 - dx) / a.cos()
-            } else {
-                f64::MAX
-            };
-            let left = if a.sin() > 1e-9 {
-                2.0 / a.sin()
-            } else {
-                f64::MAX
-            };
-            ahead.min(left).min(29.0)
-        })
-        .collect();
-    RangeScan::new(
-        -std::f64::consts::FRAC_PI_2,
-        1f64.to_radians(),
-        30.0,
-        ranges,
-    )
+    scan_of(|a| {
+        let ahead = if a.cos() > 1e-9 {
+            (3.0 - dx) / a.cos()
+        } else {
+            f64::MAX
+        };
+        let left = if a.sin() > 1e-9 {
+            2.0 / a.sin()
+        } else {
+            f64::MAX
+        };
+        ahead.min(left).min(29.0)
+    })
 }
 
 /// A match's quality comes with it: the corner matched is trusted when the answer is right (least
@@ -144,20 +136,12 @@ fn every_match_reports_its_quality() {
 /// Ranges that are no room at all: what a laser blinded by clutter or a passing crowd reads.
 fn clutter() -> RangeScan {
     let mut state = 12345u64;
-    let ranges = (0..181)
-        .map(|_| {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            0.5 + 9.5 * ((state >> 11) as f64 / (1u64 << 53) as f64)
-        })
-        .collect();
-    RangeScan::new(
-        -std::f64::consts::FRAC_PI_2,
-        1f64.to_radians(),
-        30.0,
-        ranges,
-    )
+    scan_of(|_| {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        0.5 + 9.5 * ((state >> 11) as f64 / (1u64 << 53) as f64)
+    })
 }
 
 /// A match that cannot be trusted is not used: the scan is placed by odometry, and counted.

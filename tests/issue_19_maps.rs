@@ -8,9 +8,19 @@ use sim::world::WorldMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn scratch(name: &str) -> PathBuf {
+/// Runs `twin ARGS --out DIR` from the repository into a fresh folder named after `name`.
+fn twin_into(name: &str, args: &[&str]) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("twin-issue-19-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
+    let out = Command::new(env!("CARGO_BIN_EXE_twin"))
+        .args(args)
+        .arg("--out")
+        .arg(&dir)
+        .current_dir(repo())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "twin {args:?}: {stderr}");
     dir
 }
 
@@ -101,18 +111,7 @@ impl RosMap {
 /// tour).
 #[test]
 fn a_run_writes_a_ros_map_of_what_it_saw() {
-    let dir = scratch("lab-tour");
-    let out = Command::new(env!("CARGO_BIN_EXE_twin"))
-        .args(["run", "scenarios/lab-tour.toml", "--quiet", "--out"])
-        .arg(&dir)
-        .current_dir(repo())
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let dir = twin_into("lab-tour", &["run", "scenarios/lab-tour.toml", "--quiet"]);
     let map = RosMap::read(&dir);
     assert_eq!(map.resolution, 0.05);
     assert_eq!(map.origin[2], 0.0);
@@ -155,21 +154,9 @@ fn a_run_writes_a_ros_map_of_what_it_saw() {
 /// `twin map` writes the grid of a real log too.
 #[test]
 fn a_log_map_writes_a_ros_map() {
-    let dir = scratch("mit");
-    let out = Command::new(env!("CARGO_BIN_EXE_twin"))
-        .args([
-            "map",
-            "tests/data/corrected/belgioioso-corrected.log.gz",
-            "--out",
-        ])
-        .arg(&dir)
-        .current_dir(repo())
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let dir = twin_into(
+        "belgioioso",
+        &["map", "tests/data/corrected/belgioioso-corrected.log.gz"],
     );
     let map = RosMap::read(&dir);
     let occupied = map.pixels.iter().filter(|&&v| v == 0).count();
