@@ -119,42 +119,24 @@ impl TrustRule {
         if current.is_empty() || reference.points.is_empty() {
             return MatchQuality::NONE;
         }
-        let (s, c) = pose.theta.sin_cos();
         let mut information = [[0.0f64; 3]; 3];
         let mut gradient = [0.0f64; 3];
         let (mut inliers, mut sum2) = (0usize, 0.0f64);
-        let mut hint = None;
-        for p in current {
-            let r = [c * p[0] - s * p[1], s * p[0] + c * p[1]];
-            let q = [pose.x + r[0], pose.y + r[1]];
-            let Some((j, d2)) = reference.tree.nearest_from(q, hint) else {
-                continue;
-            };
-            hint = Some(j);
-            let (signed, normal) = match surface_normal(&reference.points.xy, j) {
-                Some(n) => {
-                    let a = reference.points.xy[j];
-                    (n[0] * (q[0] - a[0]) + n[1] * (q[1] - a[1]), Some(n))
-                }
-                None => (d2.sqrt(), None),
-            };
-            let distance = signed.abs();
+        for constraint in constraints(reference, current, pose) {
+            let distance = constraint.residual.abs();
             if distance > self.inlier_m {
                 continue;
             }
             inliers += 1;
             sum2 += distance * distance;
-            if let Some(n) = normal {
-                // ∂q/∂θ = (−r_y, r_x).
-                let jac = [n[0], n[1], -n[0] * r[1] + n[1] * r[0]];
-                for (g, &a) in gradient.iter_mut().zip(&jac) {
-                    *g += a * signed;
-                }
-                for (row, &a) in information.iter_mut().zip(&jac) {
-                    for (v, &b) in row.iter_mut().zip(&jac) {
-                        *v += a * b;
-                    }
-                }
+            if let Some(jac) = constraint.jacobian {
+                accumulate(
+                    &mut information,
+                    &mut gradient,
+                    jac,
+                    constraint.residual,
+                    1.0,
+                );
             }
         }
         let rms_m = if inliers > 0 {
@@ -197,32 +179,14 @@ pub fn polish(
     gate: f64,
 ) -> Pose2 {
     for _ in 0..rounds {
-        let (s, co) = pose.theta.sin_cos();
         let mut h = [[0.0f64; 3]; 3];
         let mut g = [0.0f64; 3];
-        let mut hint = None;
-        for p in current {
-            let r = [co * p[0] - s * p[1], s * p[0] + co * p[1]];
-            let q = [pose.x + r[0], pose.y + r[1]];
-            let Some((j, _)) = reference.tree.nearest_from(q, hint) else {
-                continue;
-            };
-            hint = Some(j);
-            let Some(n) = surface_normal(&reference.points.xy, j) else {
-                continue;
-            };
-            let a = reference.points.xy[j];
-            let e = n[0] * (q[0] - a[0]) + n[1] * (q[1] - a[1]);
-            if e.abs() > gate {
-                continue;
-            }
-            let w = 1.0 / (1.0 + (e / c).powi(2));
-            let jac = [n[0], n[1], -n[0] * r[1] + n[1] * r[0]];
-            for (i, row) in h.iter_mut().enumerate() {
-                g[i] += w * jac[i] * e;
-                for (v, &b) in row.iter_mut().zip(&jac) {
-                    *v += w * jac[i] * b;
-                }
+        for constraint in constraints(reference, current, &pose) {
+            let e = constraint.residual;
+            if let Some(jac) = constraint.jacobian
+                && e.abs() <= gate
+            {
+                accumulate(&mut h, &mut g, jac, e, 1.0 / (1.0 + (e / c).powi(2)));
             }
         }
         let Some(d) = solve3(h, g.map(|v| -v)) else {
@@ -234,6 +198,56 @@ pub fn polish(
         }
     }
     pose
+}
+
+/// How far one current point, moved by the pose, lies from the reference's surface.
+struct Constraint {
+    /// Signed distance to the surface's line (along its normal), or the distance to the nearest
+    /// reference point where the surface has no direction, metres.
+    residual: f64,
+    /// The residual's derivatives by x, y and θ, for a point on a line.
+    jacobian: Option<[f64; 3]>,
+}
+
+/// Each current point's [`Constraint`] at `pose`.
+fn constraints<'a>(
+    reference: &'a Reference,
+    current: &'a [[f64; 2]],
+    pose: &Pose2,
+) -> impl Iterator<Item = Constraint> + 'a {
+    let (s, c) = pose.theta.sin_cos();
+    let (x, y) = (pose.x, pose.y);
+    let mut hint = None;
+    current.iter().filter_map(move |p| {
+        let r = [c * p[0] - s * p[1], s * p[0] + c * p[1]];
+        let q = [x + r[0], y + r[1]];
+        let (j, d2) = reference.tree.nearest_from(q, hint)?;
+        hint = Some(j);
+        Some(match surface_normal(&reference.points.xy, j) {
+            Some(n) => {
+                let a = reference.points.xy[j];
+                Constraint {
+                    residual: n[0] * (q[0] - a[0]) + n[1] * (q[1] - a[1]),
+                    // ∂q/∂θ = (−r_y, r_x).
+                    jacobian: Some([n[0], n[1], -n[0] * r[1] + n[1] * r[0]]),
+                }
+            }
+            None => Constraint {
+                residual: d2.sqrt(),
+                jacobian: None,
+            },
+        })
+    })
+}
+
+/// Adds a residual `e` with derivatives `jac`, weighted `w`, to the normal equations `h`, `g`.
+fn accumulate(h: &mut [[f64; 3]; 3], g: &mut [f64; 3], jac: [f64; 3], e: f64, w: f64) {
+    for (i, row) in h.iter_mut().enumerate() {
+        g[i] += w * jac[i] * e;
+        for (v, &b) in row.iter_mut().zip(&jac) {
+            *v += w * jac[i] * b;
+        }
+    }
 }
 
 /// The unit normal of the reference's surface at point `j`: across the chord through the scan's
