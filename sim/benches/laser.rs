@@ -14,6 +14,9 @@
 //! Beside them, the sweep's geometry alone (`cast_plane_fan` and each beam's first surface, no
 //! optics, no noise): the ray-casting limit a whole scan is measured against.
 //!
+//! The last world is made from an occupancy image (`worlds/lab-from-map.toml`): walls traced
+//! around the lab tour's map, to compare with the hand-written lab.
+//!
 //! Figures are the best of 15 rounds (the least disturbed by the machine's other work).
 //!
 //! `cargo bench --bench laser`
@@ -85,6 +88,10 @@ fn main() {
         (
             "lab + 72 boxes",
             WorldDescription::parse(&cluttered, "lab-80.toml").unwrap(),
+        ),
+        (
+            "lab from its map",
+            WorldDescription::load(root().join("worlds/lab-from-map.toml")).unwrap(),
         ),
     ];
     for (name, world) in &worlds {

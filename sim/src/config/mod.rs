@@ -5,6 +5,7 @@
 
 pub mod checks;
 mod error;
+pub mod map_image;
 mod outliers;
 pub mod robot_file;
 pub mod scenario;

@@ -40,7 +40,8 @@
 //!
 //! Frames follow REP-103: x and y in metres in the world frame, headings counter-clockwise.
 
-use super::error::{ConfigError, Source};
+use super::error::{ConfigError, Source, resolve};
+use super::map_image::MapImage;
 use super::values::{Angle, UnitInterval, show};
 use robot::Pose2;
 use serde::Deserialize;
@@ -276,6 +277,20 @@ impl WorldDescription {
                 });
             }
         }
+        if let Some(map) = &file.map {
+            let material = material(source, &map.material, Some("map.material".into()))?;
+            let height = map.height_m.as_ref().map_or(ceiling, |h| *h.get_ref());
+            if !(height > 0.0 && height <= ceiling) {
+                let span = map.height_m.as_ref().map_or(0..0, |h| h.span());
+                return Err(source.error(
+                    span,
+                    Some("map.height_m".into()),
+                    format!("expected a height in (0, ceiling = {ceiling}], found {height}"),
+                ));
+            }
+            let image = MapImage::load(&resolve(&source.path, map.yaml.get_ref()))?;
+            walls.extend(image.walls(material, [0.0, height]));
+        }
         let optics = file
             .optics
             .map_or_else(Optics::default, |o| o.into_optics());
@@ -484,6 +499,19 @@ struct WorldFile {
     #[serde(default = "default_ceiling")]
     ceiling_m: Spanned<f64>,
     optics: Option<OpticsFile>,
+    map: Option<MapFile>,
+}
+
+/// `[map]`: walls from an occupancy image and its `map.yaml` (ROS `map_server` convention).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MapFile {
+    /// The `map.yaml`, relative to the world file.
+    yaml: Spanned<String>,
+    #[serde(default = "matte")]
+    material: Spanned<String>,
+    /// Height of the walls, metres (default: the ceiling).
+    height_m: Option<Spanned<f64>>,
 }
 
 fn default_ceiling() -> Spanned<f64> {
