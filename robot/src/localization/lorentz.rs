@@ -255,13 +255,15 @@ impl ScanMatcher for Lorentz {
             .lines
             .as_ref()
             .map(|params| (lines_of(&reference.points.xy, params), params.end_margin_m));
-        let first = self.passes(reference, current, lines.as_ref(), guess);
+        let mut first = self.passes(reference, current, lines.as_ref(), guess);
         if self.restarts.is_empty() {
             return first;
         }
+        // Judged here by the rule `align` applies, so the answer carries its quality and
+        // `align` does not judge it again.
         let rule = TrustRule::default();
-        let quality = rule.assess(reference, &current.xy, &first.pose);
-        if rule.trusts(&quality) {
+        first.quality = rule.assess(reference, &current.xy, &first.pose);
+        if rule.trusts(&first.quality) {
             return first;
         }
         // Not trusted: start again from guesses around this one, and keep the trusted answer
@@ -270,15 +272,12 @@ impl ScanMatcher for Lorentz {
         let mut iterations = first.iterations;
         for offset in &self.restarts {
             let start = guess.compose(offset);
-            let result = self.passes(reference, current, lines.as_ref(), start);
+            let mut result = self.passes(reference, current, lines.as_ref(), start);
             iterations += result.iterations;
-            let q = rule.assess(reference, &current.xy, &result.pose);
-            if rule.trusts(&q)
-                && best
-                    .as_ref()
-                    .is_none_or(|(_, share)| q.inlier_share > *share)
-            {
-                best = Some((result, q.inlier_share));
+            result.quality = rule.assess(reference, &current.xy, &result.pose);
+            let share = result.quality.inlier_share;
+            if rule.trusts(&result.quality) && best.as_ref().is_none_or(|(_, s)| share > *s) {
+                best = Some((result, share));
             }
         }
         let mut chosen = best.map_or(first, |(result, _)| result);

@@ -99,7 +99,11 @@ pub trait ScanMatcher: Send + Sync + fmt::Debug {
         }
         let mut result = self.align_plausible(reference, current, guess);
         let rule = TrustRule::default();
-        result.quality = rule.assess(reference, &current.xy, &result.pose);
+        // A matcher that judged its own answer by this rule (to decide whether to start again)
+        // hands its quality back; any other answer is judged here.
+        if result.quality == MatchQuality::NONE {
+            result.quality = rule.assess(reference, &current.xy, &result.pose);
+        }
         result.converged = rule.trusts(&result.quality);
         result
     }

@@ -122,6 +122,15 @@ impl MapImage {
         }
         let negate = number("negate", Some(0.0))? != 0.0;
         let occupied_thresh = number("occupied_thresh", Some(0.65))?;
+        if !(0.0..1.0).contains(&occupied_thresh) {
+            let line = fields.get("occupied_thresh").map(|f| f.0);
+            return Err(error(
+                yaml,
+                line,
+                Some("occupied_thresh"),
+                format!("expected a probability in [0, 1), found {occupied_thresh}"),
+            ));
+        }
         let (image_line, image) = get("image")?;
         let image_path = resolve(yaml, image);
         let (width, height, values) = read_gray(&image_path)
@@ -173,46 +182,43 @@ impl MapImage {
         };
         let (w, h) = (self.width as i64, self.height as i64);
         let mut walls = Vec::new();
-        // Horizontal borders: between row y−1 and row y, for each side that is occupied.
+        // Horizontal borders: between row y−1 and row y, one run per side that is occupied.
         for y in 0..=h {
-            for below_occupied in [true, false] {
-                let mut run: Option<i64> = None;
-                for x in 0..=w {
-                    let border = x < w
-                        && self.at(x, y - 1) != self.at(x, y)
-                        && self.at(x, y - 1) == below_occupied;
-                    match (border, run) {
-                        (true, None) => run = Some(x),
-                        (false, Some(start)) => {
-                            walls.push(wall(point(start, y), point(x, y)));
-                            run = None;
-                        }
-                        _ => {}
-                    }
+            for below in [true, false] {
+                let border = |x| self.at(x, y - 1) != self.at(x, y) && self.at(x, y - 1) == below;
+                for (start, end) in runs(w, border) {
+                    walls.push(wall(point(start, y), point(end, y)));
                 }
             }
         }
         // Vertical borders: between column x−1 and column x.
         for x in 0..=w {
-            for left_occupied in [true, false] {
-                let mut run: Option<i64> = None;
-                for y in 0..=h {
-                    let border = y < h
-                        && self.at(x - 1, y) != self.at(x, y)
-                        && self.at(x - 1, y) == left_occupied;
-                    match (border, run) {
-                        (true, None) => run = Some(y),
-                        (false, Some(start)) => {
-                            walls.push(wall(point(x, start), point(x, y)));
-                            run = None;
-                        }
-                        _ => {}
-                    }
+            for left in [true, false] {
+                let border = |y| self.at(x - 1, y) != self.at(x, y) && self.at(x - 1, y) == left;
+                for (start, end) in runs(h, border) {
+                    walls.push(wall(point(x, start), point(x, end)));
                 }
             }
         }
         walls
     }
+}
+
+/// The maximal runs `[start, end)` of `0..n` where `border` holds.
+fn runs(n: i64, border: impl Fn(i64) -> bool) -> Vec<(i64, i64)> {
+    let mut found = Vec::new();
+    let mut start = None;
+    for k in 0..=n {
+        match (k < n && border(k), start) {
+            (true, None) => start = Some(k),
+            (false, Some(s)) => {
+                found.push((s, k));
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    found
 }
 
 /// Width, height and 8-bit grey values (top row first) of a binary PGM (`P5`) or a PNG.
