@@ -305,7 +305,7 @@ fn the_real_backends_path_gives_the_same_scene() {
     assert!(scene_scans.iter().all(|(s, _, _)| s.head.is_some()));
     // Written as a drive, rebuilt by the same command as a twin run.
     let dir = temp_dir("served");
-    sim::commands::drive::write_drive(&drive, &scenario, Vec::new(), &dir).unwrap();
+    sim::commands::drive::write_drive(&drive, &scenario, &[], &dir).unwrap();
     let folder = read_run_folder(&dir).unwrap();
     let map = WorldMap::new(&scenario.world);
     let served = reconstruct(

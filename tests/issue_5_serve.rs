@@ -306,7 +306,20 @@ fn the_pan_tilt_homes_and_moves_through_the_serial_face_as_on_the_twin() {
     assert_eq!(drive.scans.len(), direct.scans.len());
     // scans.jsonl places the laser where the head was put, as `twin run` does from the truth.
     let dir = std::env::temp_dir().join(format!("twin-drive-head-{}", std::process::id()));
-    sim::commands::drive::write_drive(&drive, &scenario, Vec::new(), &dir).unwrap();
+    sim::commands::drive::write_drive(&drive, &scenario, &events, &dir).unwrap();
+    // Its recording reads back in the Python MCAP reader (issue 19), the head's transforms and
+    // the link's events with it.
+    let report = crate::issue_19_recording::python_reads(&dir);
+    assert_eq!(
+        report["rosout"].as_u64(),
+        Some(events.len() as u64),
+        "{report}"
+    );
+    assert_eq!(
+        report["head_transforms_checked"].as_u64(),
+        Some(drive.scans.len() as u64),
+        "{report}"
+    );
     let text = std::fs::read_to_string(dir.join("scans.jsonl")).unwrap();
     let first: sim::output::ScanLine = serde_json::from_str(text.lines().next().unwrap()).unwrap();
     let expected = sim::output::ScanLine::of(&direct.scans[0], &scenario.robot.mount());

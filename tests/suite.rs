@@ -15,6 +15,7 @@ mod issue_17_fleet;
 mod issue_17_polling;
 mod issue_18_honest_matches;
 mod issue_19_maps;
+mod issue_19_recording;
 mod issue_2_bad_input;
 mod issue_2_collision;
 mod issue_2_contract;

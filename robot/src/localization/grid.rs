@@ -6,7 +6,11 @@
 //! traversal): the cells it crosses gain evidence of being free, the cell of its end evidence of
 //! being occupied; a beam that returned nothing frees the cells up to
 //! [`GridConfig::free_range_m`] (none by default). Evidence is summed as log-odds and clamped, so a cell seen free a
-//! hundred times is not lost to one outlier. The image is written with the grid's top row (largest
+//! hundred times is not lost to one outlier. A scan taken within 20 cm and 5° of the last one
+//! inserted is left out ([`GridConfig::keyframe_m`]; mapping packages do the same, gmapping's
+//! default at 1 m and 0.5 rad): it would trace nearly the same cells again (a robot at rest scans
+//! the same room five times a second), and the map's cost then follows the ground covered, not
+//! the time spent. The image is written with the grid's top row (largest
 //! y) first, as `map_server` reads it, and `origin` is the pose of the lower-left cell's corner.
 
 use super::scan::RangeScan;
@@ -33,6 +37,11 @@ pub struct GridConfig {
     pub occupied_thresh: f64,
     /// Cells at most this likely occupied are written free. Default 0.196.
     pub free_thresh: f64,
+    /// A scan is inserted only when its laser moved this far from the last scan inserted,
+    /// metres, or turned [`GridConfig::keyframe_rad`]. Default 0.2; 0 inserts every scan.
+    pub keyframe_m: f64,
+    /// See [`GridConfig::keyframe_m`], radians. Default 5°.
+    pub keyframe_rad: f64,
 }
 
 impl Default for GridConfig {
@@ -46,6 +55,8 @@ impl Default for GridConfig {
             clamp: 4.0,
             occupied_thresh: 0.65,
             free_thresh: 0.196,
+            keyframe_m: 0.2,
+            keyframe_rad: 5f64.to_radians(),
         }
     }
 }
@@ -80,9 +91,26 @@ impl OccupancyGrid {
     /// The grid of `scans`, each seen from the laser pose beside it (map frame), with a margin of
     /// one metre; `None` when there is nothing to draw or the map would hold more than 10⁸ cells.
     pub fn from_scans<'a>(
-        scans: impl IntoIterator<Item = (Pose2, &'a RangeScan)> + Clone,
+        scans: impl IntoIterator<Item = (Pose2, &'a RangeScan)>,
         config: GridConfig,
     ) -> Option<Self> {
+        // The scans that add something: a finite pose, away from the last one inserted.
+        let mut last: Option<Pose2> = None;
+        let scans: Vec<(Pose2, &RangeScan)> = scans
+            .into_iter()
+            .filter(|(pose, _)| {
+                let finite = pose.x.is_finite() && pose.y.is_finite() && pose.theta.is_finite();
+                let moved = last.is_none_or(|l| {
+                    l.distance(pose) >= config.keyframe_m
+                        || crate::geometry::wrap_angle(l.theta - pose.theta).abs()
+                            >= config.keyframe_rad
+                });
+                if finite && moved {
+                    last = Some(*pose);
+                }
+                finite && moved
+            })
+            .collect();
         // The bounds of what the beams reach.
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         let mut grow = |p: [f64; 2]| {
@@ -91,10 +119,7 @@ impl OccupancyGrid {
                 hi[k] = hi[k].max(p[k]);
             }
         };
-        for (pose, scan) in scans.clone() {
-            if !(pose.x.is_finite() && pose.y.is_finite() && pose.theta.is_finite()) {
-                continue;
-            }
+        for &(pose, scan) in &scans {
             grow([pose.x, pose.y]);
             for i in 0..scan.ranges.len() {
                 if let Some(end) = Self::beam_end(&config, pose, scan, i) {
@@ -120,9 +145,7 @@ impl OccupancyGrid {
             log_odds: vec![0.0; width * height],
         };
         for (pose, scan) in scans {
-            if pose.x.is_finite() && pose.y.is_finite() && pose.theta.is_finite() {
-                grid.insert(pose, scan);
-            }
+            grid.insert(pose, scan);
         }
         grid.trim();
         Some(grid)

@@ -1,5 +1,6 @@
-//! Readers of recorded runs: CARMEN logs (`.clf`) and the two formats of 002 App. C
-//! (`.script` and RobotLogger `.log`).
+//! Readers of recorded runs: CARMEN logs (`.clf`), the two formats of 002 App. C (`.script` and
+//! RobotLogger `.log`) and MCAP files of ROS 2 messages (`.mcap`, which [`mcap::Recorder`] also
+//! writes; the messages themselves are in [`ros2`]).
 //!
 //! Each reader turns a file into a [`RecordedLog`]: odometry samples and scans in file order,
 //! in SI units and REP-103 axes, plus the laser's mount and a count of the lines it skipped.
@@ -7,7 +8,9 @@
 //! line and what was expected; lines of unknown kinds are skipped and counted.
 
 mod carmen;
+pub mod mcap;
 mod robotlogger;
+pub mod ros2;
 mod script;
 
 use crate::geometry::Pose2;
@@ -46,6 +49,8 @@ pub enum LogFormat {
     Script,
     /// 002's RobotLogger `.log` (`odometry:`, `laser-scan:`, `laser-geometry:`).
     RobotLogger,
+    /// MCAP of ROS 2 messages (`LaserScan`, `Odometry`, `/tf`).
+    Mcap,
 }
 
 /// A log read into memory.
@@ -132,7 +137,7 @@ pub enum LogError {
     },
     /// Neither the extension nor the content says which format the file is.
     #[error(
-        "{file}: unknown log format: expected a CARMEN .clf, a .script (POS/LASER-RANGE) or a RobotLogger .log"
+        "{file}: unknown log format: expected a CARMEN .clf, a .script (POS/LASER-RANGE), a RobotLogger .log or an MCAP bag of ROS 2 messages"
     )]
     UnknownFormat {
         /// The file.
@@ -180,16 +185,30 @@ pub fn read_log(path: &Path) -> Result<RecordedLog, LogError> {
         file: file.clone(),
         source,
     };
+    /// An MCAP file's first bytes.
+    const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
+    let bytes = std::fs::read(path).map_err(io)?;
+    if bytes.starts_with(MCAP_MAGIC) || path.extension().is_some_and(|e| e == "mcap") {
+        return mcap::read_mcap(&bytes, &file);
+    }
     let gzipped = path.extension().is_some_and(|e| e == "gz");
     let text = if gzipped {
         use std::io::Read;
         let mut text = String::new();
-        flate2::read::GzDecoder::new(std::fs::File::open(path).map_err(io)?)
+        flate2::read::GzDecoder::new(bytes.as_slice())
             .read_to_string(&mut text)
             .map_err(io)?;
         text
     } else {
-        std::fs::read_to_string(path).map_err(io)?
+        String::from_utf8(bytes).map_err(|e| {
+            io(std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                format!(
+                    "not text (a byte that is not UTF-8 at {})",
+                    e.utf8_error().valid_up_to()
+                ),
+            ))
+        })?
     };
     // `name.log.gz` is read as `name.log`.
     let inner = if gzipped {
@@ -219,6 +238,7 @@ pub fn parse_log(text: &str, format: LogFormat, file: &str) -> Result<RecordedLo
         LogFormat::Carmen => carmen::parse(text, file),
         LogFormat::Script => script::parse(text, file),
         LogFormat::RobotLogger => robotlogger::parse(text, file),
+        LogFormat::Mcap => mcap::read_mcap(text.as_bytes(), file),
     }?;
     if log.scans() == 0 {
         return Err(LogError::NoScans {

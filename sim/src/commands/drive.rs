@@ -193,12 +193,13 @@ pub struct DriveSummary {
     pub link_events: Vec<String>,
 }
 
-/// Writes `odometry.tum`, `estimate.tum` (when localising), `scans.jsonl`, `map.svg` and
-/// `summary.json` into `dir`; `link_events` go into the summary.
+/// Writes `odometry.tum`, `estimate.tum` (when localising), `scans.jsonl`, `map.svg`,
+/// `run.mcap` and `summary.json` into `dir`; `link_events` go into the summary and onto the
+/// recording's `/rosout`.
 pub fn write_drive(
     record: &DriveRecord,
     scenario: &Scenario,
-    link_events: Vec<String>,
+    link_events: &[robot::serial::LinkEvent],
     dir: &Path,
 ) -> std::io::Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir)?;
@@ -263,6 +264,36 @@ pub fn write_drive(
         });
     }
     write_log_map_svg(&file("map.svg"), &panels)?;
+    crate::output::write_mcap(
+        &file("run.mcap"),
+        &crate::output::Recording {
+            mount,
+            scan_time_s: crate::output::scan_period_s(&scenario.robot.laser),
+            scans: record
+                .scans
+                .iter()
+                .map(|(scan, odometry, _)| crate::output::RecordedScan {
+                    scan,
+                    odometry: *odometry,
+                    truth: None,
+                })
+                .collect(),
+            estimate: record
+                .localisation
+                .iter()
+                .flat_map(|(_, placed, _)| placed.iter().map(|p| (p.stamp, p.estimate)))
+                .collect(),
+            sonar: None,
+            points: record.reconstruction.as_ref().map(|r| {
+                let main = r.main();
+                (main.placement, main.model.vertices.as_slice())
+            }),
+            link_events: link_events
+                .iter()
+                .map(|e| (e.stamp, e.device.to_string(), e.what.clone()))
+                .collect(),
+        },
+    )?;
     let pose = |p: &Pose2| [p.x, p.y, p.theta];
     let summary = DriveSummary {
         scenario: record.scenario.clone(),
@@ -286,7 +317,7 @@ pub fn write_drive(
             .localisation
             .as_ref()
             .map(|(_, _, map)| occupied_cells(map).len()),
-        link_events,
+        link_events: link_events.iter().map(ToString::to_string).collect(),
     };
     let mut text = serde_json::to_string_pretty(&summary)?;
     text.push('\n');
@@ -392,11 +423,7 @@ pub fn main(args: DriveArgs) -> Result<(), super::CommandError> {
         bar.set_position(done as u64)
     });
     bar.finish_and_clear();
-    let events: Vec<String> = robot
-        .take_events()
-        .iter()
-        .map(ToString::to_string)
-        .collect();
+    let events = robot.take_events();
     if !args.quiet {
         for e in &events {
             eprintln!("{e}");
@@ -406,12 +433,11 @@ pub fn main(args: DriveArgs) -> Result<(), super::CommandError> {
     let dir = args
         .out
         .unwrap_or_else(|| PathBuf::from("out").join(format!("drive-{}", scenario.name)));
-    let files = write_drive(&record, &scenario, events.clone(), &dir).map_err(|source| {
-        CommandError::Write {
+    let files =
+        write_drive(&record, &scenario, &events, &dir).map_err(|source| CommandError::Write {
             dir: dir.clone(),
             source,
-        }
-    })?;
+        })?;
     if !args.quiet {
         let p = record.final_odometry;
         say!(

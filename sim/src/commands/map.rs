@@ -292,7 +292,8 @@ fn strip_position(message: &str) -> &str {
 /// both maps and a summary with timings.
 #[derive(Clone, Debug, clap::Args)]
 pub struct MapArgs {
-    /// The log file.
+    /// The log: a CARMEN `.clf`, a `.script`, a RobotLogger `.log` (each possibly `.gz`) or an
+    /// MCAP bag of ROS 2 messages (`.mcap`).
     pub log: PathBuf,
     /// The matcher: ls, lorentz, lorentz-lines or mbicp.
     #[arg(long, default_value = "lorentz")]
@@ -351,7 +352,7 @@ pub fn map_main(args: MapArgs) -> Result<(), super::CommandError> {
         })?;
     if !args.quiet {
         say!(
-            "{name}: {} scans matched with {} in {:.2} s ({:.2} ms per scan, {:.1} iterations per match); {} lines skipped",
+            "{name}: {} scans matched with {} in {:.2} s ({:.2} ms per scan, {:.1} iterations per match); {} records of other kinds skipped",
             summary.scans,
             args.matcher,
             summary.wall_seconds,

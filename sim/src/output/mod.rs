@@ -9,6 +9,7 @@
 pub mod figure;
 mod grid;
 pub mod logmap;
+mod mcap;
 mod ply;
 mod reconstruction;
 mod render;
@@ -22,6 +23,7 @@ mod world_json;
 pub use world_json::write_world_json;
 
 pub use grid::write_grid;
+pub use mcap::{RecordedScan, Recording, write_mcap};
 pub use ply::write_ply;
 pub use reconstruction::{
     ReconstructionFile, THESIS_QUADS, THESIS_TRIANGLES, reconstruction_file, reconstruction_report,
@@ -62,6 +64,51 @@ fn level_scans(record: &RunRecord, scenario: &Scenario) -> Vec<(robot::Pose2, Ra
             .filter_map(|s| Some((s.odometry.compose(&laser(s)?), RangeScan::from(&s.scan))))
             .collect(),
     }
+}
+
+/// A run as the topics of `run.mcap`.
+fn recording<'a>(record: &'a RunRecord, scenario: &Scenario) -> Recording<'a> {
+    let robot = &scenario.robot;
+    Recording {
+        mount: robot.mount(),
+        scan_time_s: scan_period_s(&robot.laser),
+        scans: record
+            .scans
+            .iter()
+            .map(|s| RecordedScan {
+                scan: &s.scan,
+                odometry: s.odometry,
+                truth: Some(s.truth),
+            })
+            .collect(),
+        estimate: record
+            .localisation
+            .iter()
+            .flat_map(|l| l.placed.iter().map(|p| (p.stamp, p.estimate)))
+            .collect(),
+        sonar: record.sonar.as_ref().zip(
+            robot
+                .sonar
+                .as_ref()
+                .map(|d| [d.min_range_m.get(), d.max_range_m.get()]),
+        ),
+        points: record.reconstruction.as_ref().map(|r| {
+            let main = r.main();
+            (main.placement, main.model.vertices.as_slice())
+        }),
+        link_events: Vec::new(),
+    }
+}
+
+/// Mean time between a laser's scans, seconds: its sweep or its telegram's transfer.
+pub(crate) fn scan_period_s(laser: &crate::config::robot_file::LaserDescription) -> f64 {
+    crate::devices::laser::LaserTiming::new(
+        std::time::Duration::from_secs_f64(laser.sweep_s.get()),
+        laser.telegram_bytes,
+        laser.baud,
+    )
+    .mean_period()
+    .as_secs_f64()
 }
 
 /// Why a file a run wrote cannot be read back.
@@ -162,6 +209,7 @@ pub fn write_all(record: &RunRecord, scenario: &Scenario, dir: &Path) -> std::io
             &record.scenario,
         )?;
     }
+    write_mcap(&file("run.mcap"), &recording(record, scenario))?;
     files.extend(write_grid(
         dir,
         level_scans(record, scenario).iter().map(|(p, s)| (*p, s)),

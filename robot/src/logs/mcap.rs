@@ -1,0 +1,364 @@
+//! MCAP files of ROS 2 messages: written by [`Recorder`] (the twin's runs and the real robot's
+//! drives), read by [`read_mcap`] into a [`RecordedLog`] so that `twin map` maps bags from any
+//! ROS 2 robot.
+//!
+//! Reading takes the first `sensor_msgs/LaserScan` topic (`/scan` when there are several), the
+//! odometry from `nav_msgs/Odometry` or, when the bag has none, from `/tf`'s `odom` → base
+//! transforms, and the laser's mount on the base from `/tf_static` (the chain of static
+//! transforms from the base to the scan's frame; identity when there is none, as for a CARMEN
+//! log that does not say). Chunks must be uncompressed: this build leaves out the zstd and lz4
+//! codecs (`ros2 bag record` writes uncompressed MCAP unless asked), and a compressed file is
+//! refused by name.
+
+use super::{LogError, LogEvent, LogFormat, RecordedLog};
+use crate::geometry::Pose2;
+use crate::localization::RangeScan;
+use crate::logs::ros2::{CdrReader, Ros2Message, TransformStamped};
+use crate::time::Stamp;
+use std::collections::BTreeMap;
+use std::io::{Seek, Write};
+use std::path::Path;
+
+/// Why a recording cannot be written.
+#[derive(Debug, thiserror::Error)]
+pub enum RecordError {
+    /// The file cannot be created.
+    #[error("{file}: {source}")]
+    Io {
+        /// The file.
+        file: String,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The MCAP writer refused.
+    #[error("MCAP: {0}")]
+    Mcap(#[from] mcap::McapError),
+}
+
+/// Writes ROS 2 messages into an MCAP file: one channel per topic, CDR-encoded, each message
+/// logged and published at the time given (simulated or robot time, never the wall clock).
+pub struct Recorder<W: Write + Seek> {
+    writer: mcap::Writer<W>,
+    channels: BTreeMap<String, u16>,
+    sequence: u32,
+}
+
+impl Recorder<std::io::BufWriter<std::fs::File>> {
+    /// A recording into a new file at `path`.
+    pub fn create(path: &Path) -> Result<Self, RecordError> {
+        let file = std::fs::File::create(path).map_err(|source| RecordError::Io {
+            file: path.display().to_string(),
+            source,
+        })?;
+        Recorder::new(std::io::BufWriter::new(file))
+    }
+}
+
+impl<W: Write + Seek> Recorder<W> {
+    /// A recording into `w`.
+    pub fn new(w: W) -> Result<Self, RecordError> {
+        let writer = mcap::WriteOptions::new()
+            .compression(None)
+            .profile("ros2")
+            .library("robot-twin")
+            .create(w)?;
+        Ok(Recorder {
+            writer,
+            channels: BTreeMap::new(),
+            sequence: 0,
+        })
+    }
+
+    /// Writes `msg` on `topic`, stamped `at` (its channel and schema added on first use).
+    pub fn write<M: Ros2Message>(
+        &mut self,
+        topic: &str,
+        at: Stamp,
+        msg: &M,
+    ) -> Result<(), RecordError> {
+        let channel_id = match self.channels.get(topic) {
+            Some(&id) => id,
+            None => {
+                let schema =
+                    self.writer
+                        .add_schema(M::NAME, "ros2msg", M::definition().as_bytes())?;
+                let id = self
+                    .writer
+                    .add_channel(schema, topic, "cdr", &BTreeMap::new())?;
+                self.channels.insert(topic.to_string(), id);
+                id
+            }
+        };
+        self.sequence += 1;
+        self.writer.write_to_known_channel(
+            &mcap::records::MessageHeader {
+                channel_id,
+                sequence: self.sequence,
+                log_time: at.0,
+                publish_time: at.0,
+            },
+            &msg.to_cdr(),
+        )?;
+        Ok(())
+    }
+
+    /// Messages written so far.
+    pub fn messages(&self) -> u32 {
+        self.sequence
+    }
+
+    /// Writes the summary and flushes.
+    pub fn finish(mut self) -> Result<(), RecordError> {
+        self.writer.finish()?;
+        let mut inner = self.writer.into_inner();
+        inner.flush().map_err(|source| RecordError::Io {
+            file: "the recording".into(),
+            source,
+        })
+    }
+}
+
+/// The base frames a bag's odometry may name.
+const BASE_FRAMES: [&str; 2] = ["base_link", "base_footprint"];
+
+/// Reads an MCAP file of ROS 2 messages (see the module's documentation).
+pub fn read_mcap(bytes: &[u8], file: &str) -> Result<RecordedLog, LogError> {
+    let malformed = |what: String| LogError::Malformed {
+        file: file.to_string(),
+        line: 0,
+        message: what,
+    };
+    let stream = mcap::MessageStream::new(bytes)
+        .map_err(|e| malformed(format!("not an MCAP file ({e})")))?;
+    let mut log = RecordedLog::new(LogFormat::Mcap);
+    let mut scan_topic: Option<String> = None;
+    let mut odometry: Vec<(Stamp, Pose2)> = Vec::new();
+    let mut tf_odometry: Vec<(Stamp, Pose2)> = Vec::new();
+    let mut statics: BTreeMap<String, TransformStamped> = BTreeMap::new();
+    let mut scans: Vec<RangeScan> = Vec::new();
+    let mut scan_frame = String::new();
+    for (n, message) in stream.enumerate() {
+        let message = message.map_err(|e| malformed(format!("message {}: {e}", n + 1)))?;
+        let channel = &message.channel;
+        let schema = channel.schema.as_ref().map(|s| s.name.as_str());
+        if channel.message_encoding != "cdr" {
+            log.skip(&channel.topic);
+            continue;
+        }
+        let bad = |e: crate::logs::ros2::CdrError| {
+            malformed(format!(
+                "message {} on {} ({}): {e}",
+                n + 1,
+                channel.topic,
+                schema.unwrap_or("no schema")
+            ))
+        };
+        let reader = CdrReader::new(&message.data).map_err(bad)?;
+        match schema {
+            Some("sensor_msgs/msg/LaserScan") => {
+                let topic = scan_topic.get_or_insert_with(|| channel.topic.clone());
+                if *topic != channel.topic {
+                    if channel.topic == "/scan" && scans.is_empty() {
+                        *topic = channel.topic.clone();
+                    } else {
+                        log.skip(&channel.topic);
+                        continue;
+                    }
+                }
+                let msg = reader.laser_scan().map_err(bad)?;
+                let range_max = f64::from(msg.range_max);
+                let plausible = range_max > 0.0
+                    && range_max < 1e4
+                    && msg.angle_increment.is_finite()
+                    && msg.angle_min.is_finite();
+                if !plausible {
+                    return Err(malformed(format!(
+                        "message {} on {}: range_max {} m, angle_min {}, angle_increment {}: expected a positive range_max below 10 km and finite angles",
+                        n + 1,
+                        channel.topic,
+                        msg.range_max,
+                        msg.angle_min,
+                        msg.angle_increment
+                    )));
+                }
+                scan_frame.clone_from(&msg.header.frame_id);
+                // REP-117: +inf no return, -inf too close, NaN erroneous: all "nothing here".
+                let ranges = msg
+                    .ranges
+                    .iter()
+                    .map(|&r| {
+                        let r = f64::from(r);
+                        if r.is_finite() && r >= 0.0 && r < range_max {
+                            r
+                        } else {
+                            range_max
+                        }
+                    })
+                    .collect();
+                let mut scan = RangeScan::new(
+                    f64::from(msg.angle_min),
+                    f64::from(msg.angle_increment),
+                    range_max,
+                    ranges,
+                );
+                scan.stamp = msg.header.stamp;
+                scans.push(scan);
+            }
+            Some("nav_msgs/msg/Odometry") => {
+                let msg = reader.odometry().map_err(bad)?;
+                odometry.push((msg.header.stamp, msg.pose.to_planar()));
+            }
+            Some("tf2_msgs/msg/TFMessage") => {
+                let msg = reader.tf().map_err(bad)?;
+                for t in msg.0 {
+                    if channel.topic == "/tf_static" {
+                        statics.insert(t.child_frame_id.clone(), t);
+                    } else if t.header.frame_id == "odom"
+                        && BASE_FRAMES.contains(&t.child_frame_id.as_str())
+                    {
+                        tf_odometry.push((t.header.stamp, t.transform.to_planar()));
+                    }
+                }
+            }
+            _ => log.skip(&channel.topic),
+        }
+    }
+    if odometry.is_empty() {
+        odometry = tf_odometry;
+    }
+    log.mount = static_mount(&statics, &scan_frame).unwrap_or(Pose2::IDENTITY);
+    // Both streams in time order, odometry first at equal stamps (the scan then finds it).
+    let mut events: Vec<(Stamp, u8, LogEvent)> = odometry
+        .into_iter()
+        .map(|(stamp, pose)| (stamp, 0, LogEvent::Odometry { stamp, pose }))
+        .chain(scans.into_iter().map(|s| (s.stamp, 1, LogEvent::Scan(s))))
+        .collect();
+    events.sort_by_key(|(stamp, order, _)| (*stamp, *order));
+    log.events = events.into_iter().map(|(_, _, e)| e).collect();
+    if log.scans() == 0 {
+        return Err(LogError::NoScans {
+            file: file.to_string(),
+            format: LogFormat::Mcap,
+            lines: 0,
+            skipped: log.skipped_lines(),
+        });
+    }
+    Ok(log)
+}
+
+/// The planar pose of `frame` on the base by the chain of static transforms, if it reaches a
+/// base frame.
+fn static_mount(statics: &BTreeMap<String, TransformStamped>, frame: &str) -> Option<Pose2> {
+    let mut pose = Pose2::IDENTITY;
+    let mut at = frame.to_string();
+    for _ in 0..=statics.len() {
+        if BASE_FRAMES.contains(&at.as_str()) {
+            return Some(pose);
+        }
+        let t = statics.get(&at)?;
+        pose = t.transform.to_planar().compose(&pose);
+        at.clone_from(&t.header.frame_id);
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::logs::ros2::{Header, LaserScanMsg, OdometryMsg, TfMessage, Transform};
+
+    fn bag(odometry_by_tf: bool) -> Vec<u8> {
+        let mut out = std::io::Cursor::new(Vec::new());
+        let mut rec = Recorder::new(&mut out).unwrap();
+        rec.write(
+            "/tf_static",
+            Stamp::ZERO,
+            &TfMessage(vec![TransformStamped {
+                header: Header::new(Stamp::ZERO, "base_link"),
+                child_frame_id: "laser".into(),
+                transform: Transform::planar(Pose2::new(0.1, 0.0, 0.0)),
+            }]),
+        )
+        .unwrap();
+        for k in 0..3u64 {
+            let at = Stamp(k * 100_000_000);
+            let pose = Pose2::new(0.1 * k as f64, 0.0, 0.0);
+            if odometry_by_tf {
+                rec.write(
+                    "/tf",
+                    at,
+                    &TfMessage(vec![TransformStamped {
+                        header: Header::new(at, "odom"),
+                        child_frame_id: "base_link".into(),
+                        transform: Transform::planar(pose),
+                    }]),
+                )
+                .unwrap();
+            } else {
+                rec.write(
+                    "/odom",
+                    at,
+                    &OdometryMsg {
+                        header: Header::new(at, "odom"),
+                        child_frame_id: "base_link".into(),
+                        pose: Transform::planar(pose),
+                        pose_covariance: [0.0; 36],
+                        linear: [0.0; 3],
+                        angular: [0.0; 3],
+                        twist_covariance: [0.0; 36],
+                    },
+                )
+                .unwrap();
+            }
+            rec.write(
+                "/scan",
+                at,
+                &LaserScanMsg {
+                    header: Header::new(at, "laser"),
+                    angle_min: -1.0,
+                    angle_max: 1.0,
+                    angle_increment: 1.0,
+                    time_increment: 0.0,
+                    scan_time: 0.1,
+                    range_min: 0.0,
+                    range_max: 8.0,
+                    ranges: vec![1.0, f32::INFINITY, f32::NAN],
+                    intensities: vec![],
+                },
+            )
+            .unwrap();
+        }
+        assert_eq!(rec.messages(), 7);
+        rec.finish().unwrap();
+        out.into_inner()
+    }
+
+    #[test]
+    fn a_bag_reads_back_as_scans_odometry_and_mount() {
+        for by_tf in [false, true] {
+            let log = read_mcap(&bag(by_tf), "t.mcap").unwrap();
+            assert_eq!((log.scans(), log.odometry_samples()), (3, 3), "{by_tf}");
+            assert!((log.mount.x - 0.1).abs() < 1e-12);
+            let LogEvent::Scan(s) = &log.events[1] else {
+                panic!("odometry first, then its scan: {:?}", log.events[1]);
+            };
+            assert_eq!(s.ranges, vec![1.0, 8.0, 8.0], "no returns are the maximum");
+        }
+    }
+
+    #[test]
+    fn the_same_messages_give_the_same_bytes() {
+        assert_eq!(bag(false), bag(false));
+    }
+
+    #[test]
+    fn garbage_and_cut_files_are_refused_by_name() {
+        let err = read_mcap(b"not mcap at all", "x.mcap").unwrap_err();
+        assert!(err.to_string().starts_with("x.mcap"), "{err}");
+        let full = bag(false);
+        for cut in [8, full.len() / 2, full.len() - 10] {
+            assert!(read_mcap(&full[..cut], "cut.mcap").is_err(), "{cut}");
+        }
+    }
+}

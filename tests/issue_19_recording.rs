@@ -1,0 +1,137 @@
+//! Issue 19, recording: every `twin run` writes `run.mcap`, ROS 2 messages in CDR with `ros2msg`
+//! schemas. Decoded here by the MCAP project's own Python reader (`mcap-ros2-support`, which
+//! `.ci/run` installs: independent of the Rust writer) and held against the run's other files —
+//! `/scan` against `scans.jsonl` (same stamps, same ranges, no return as +inf), `/odom`,
+//! `/ground_truth` and `/estimate` against the TUM files, `map` → `odom` → `base_link` against
+//! the truth, the pan-tilt's transforms against the laser pose `scans.jsonl` gives, the sonar
+//! ring against `sonar.json`, the 3D model's cloud against `model.ply`. Then `twin map` maps a
+//! recording as it maps a CARMEN log, and the same seed writes the same bytes.
+
+use crate::common::repo;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// Runs `twin ARGS --out DIR` from the repository into a fresh folder named after `name`.
+fn twin_into(name: &str, args: &[&str]) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("twin-issue-19-rec-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = Command::new(env!("CARGO_BIN_EXE_twin"))
+        .args(args)
+        .arg("--out")
+        .arg(&dir)
+        .current_dir(repo())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "twin {args:?}: {stderr}");
+    dir
+}
+
+/// The Python reader's report on a run folder.
+pub fn python_reads(dir: &Path) -> serde_json::Value {
+    let out = Command::new("python3")
+        .arg(repo().join("tests/python/read_run_mcap.py"))
+        .arg(dir)
+        .output()
+        .expect("python3 (and `pip install mcap-ros2-support`, as .ci/run does)");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success(),
+        "the Python MCAP reader refused {}: {stderr}\n(it needs `pip install mcap-ros2-support`)",
+        dir.display()
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+fn count(report: &serde_json::Value, topic: &str) -> u64 {
+    report["topics"][topic]["count"].as_u64().unwrap_or(0)
+}
+
+fn scans_in(dir: &Path) -> u64 {
+    std::fs::read_to_string(dir.join("scans.jsonl"))
+        .unwrap()
+        .lines()
+        .count() as u64
+}
+
+#[test]
+fn a_localising_run_reads_back_in_the_python_reader() {
+    let dir = twin_into("tour", &["run", "scenarios/lab-tour.toml", "--quiet"]);
+    let report = python_reads(&dir);
+    let scans = scans_in(&dir);
+    assert!(scans > 20);
+    for topic in [
+        "/scan",
+        "/odom",
+        "/tf",
+        "/ground_truth",
+        "/clock",
+        "/estimate",
+    ] {
+        assert_eq!(count(&report, topic), scans, "{topic}: {report}");
+    }
+    assert_eq!(
+        report["topics"]["/scan"]["type"],
+        "sensor_msgs/msg/LaserScan"
+    );
+    assert_eq!(count(&report, "/tf_static"), 1);
+}
+
+#[test]
+fn the_pan_tilt_the_sonar_ring_and_the_3d_model_read_back() {
+    let scene = twin_into("scene", &["run", "scenarios/scene-lab.toml", "--quiet"]);
+    let report = python_reads(&scene);
+    assert_eq!(
+        report["head_transforms_checked"].as_u64(),
+        Some(scans_in(&scene)),
+        "every scan's head transforms checked: {report}"
+    );
+    assert_eq!(count(&report, "/points"), 1, "{report}");
+    let ring = twin_into("ring", &["run", "scenarios/sonar-ring.toml", "--quiet"]);
+    let report = python_reads(&ring);
+    assert_eq!(report["sonar_checked"].as_u64(), Some(16), "{report}");
+    assert_eq!(
+        report["topics"]["/sonar/0"]["type"],
+        "sensor_msgs/msg/Range"
+    );
+}
+
+#[test]
+fn twin_map_maps_a_recording_and_the_same_seed_writes_the_same_bytes() {
+    let a = twin_into("seed-a", &["run", "scenarios/lab-tour.toml", "--quiet"]);
+    let b = twin_into("seed-b", &["run", "scenarios/lab-tour.toml", "--quiet"]);
+    let bytes = std::fs::read(a.join("run.mcap")).unwrap();
+    assert!(
+        bytes == std::fs::read(b.join("run.mcap")).unwrap(),
+        "run.mcap differs between two runs of one seed"
+    );
+    let log = robot::logs::read_log(&a.join("run.mcap")).unwrap();
+    assert_eq!(log.format, robot::logs::LogFormat::Mcap);
+    assert_eq!(log.scans() as u64, scans_in(&a));
+    assert_eq!(log.odometry_samples() as u64, scans_in(&a));
+    // The laser's mount came from /tf_static: the Pioneer's laser is ahead of the axle.
+    let pioneer = crate::common::robot("pioneer-3dx");
+    assert!(
+        (log.mount.x - pioneer.laser.x_m.get()).abs() < 1e-9,
+        "{:?}",
+        log.mount
+    );
+    let map_dir = twin_into(
+        "map",
+        &[
+            "map",
+            a.join("run.mcap").to_str().unwrap(),
+            "--matcher",
+            "lorentz",
+            "--quiet",
+        ],
+    );
+    for file in ["map.pgm", "map.yaml", "estimate.tum", "summary.json"] {
+        assert!(map_dir.join(file).exists(), "twin map wrote no {file}");
+    }
+    // A cut recording is refused with the file's name, not read in part.
+    let cut = a.join("cut.mcap");
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    let err = robot::logs::read_log(&cut).unwrap_err().to_string();
+    assert!(err.contains("cut.mcap"), "{err}");
+}
