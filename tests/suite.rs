@@ -14,6 +14,7 @@ mod issue_17_fast_laser;
 mod issue_17_fleet;
 mod issue_17_polling;
 mod issue_18_honest_matches;
+mod issue_19_live;
 mod issue_19_maps;
 mod issue_19_recording;
 mod issue_2_bad_input;

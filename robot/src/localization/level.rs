@@ -73,6 +73,11 @@ impl LevelLocaliser {
         }
     }
 
+    /// The scans placed so far, in order (the last ones wait for odometry past their stamp).
+    pub fn placed(&self) -> &[Placed] {
+        self.builder.placed()
+    }
+
     /// Scans left out: tilted, taken for a scene, or with the head's angles unknown.
     pub fn skipped(&self) -> usize {
         self.skipped

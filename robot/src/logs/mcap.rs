@@ -13,7 +13,7 @@
 use super::{LogError, LogEvent, LogFormat, RecordedLog};
 use crate::geometry::Pose2;
 use crate::localization::RangeScan;
-use crate::logs::ros2::{CdrReader, Ros2Message, TransformStamped};
+use crate::logs::ros2::{CdrReader, Encoded, Ros2Message, TransformStamped};
 use crate::time::Stamp;
 use std::collections::BTreeMap;
 use std::io::{Seek, Write};
@@ -77,12 +77,22 @@ impl<W: Write + Seek> Recorder<W> {
         at: Stamp,
         msg: &M,
     ) -> Result<(), RecordError> {
+        self.write_encoded(topic, at, &Encoded::of(msg))
+    }
+
+    /// Writes an encoded message on `topic`, stamped `at`.
+    pub fn write_encoded(
+        &mut self,
+        topic: &str,
+        at: Stamp,
+        msg: &Encoded,
+    ) -> Result<(), RecordError> {
         let channel_id = match self.channels.get(topic) {
             Some(&id) => id,
             None => {
                 let schema =
                     self.writer
-                        .add_schema(M::NAME, "ros2msg", M::definition().as_bytes())?;
+                        .add_schema(msg.name, "ros2msg", (msg.definition)().as_bytes())?;
                 let id = self
                     .writer
                     .add_channel(schema, topic, "cdr", &BTreeMap::new())?;
@@ -98,7 +108,7 @@ impl<W: Write + Seek> Recorder<W> {
                 log_time: at.0,
                 publish_time: at.0,
             },
-            &msg.to_cdr(),
+            &msg.cdr,
         )?;
         Ok(())
     }

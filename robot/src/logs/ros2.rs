@@ -32,6 +32,29 @@ pub trait Ros2Message {
     }
 }
 
+/// A message already encoded, with what a channel needs to announce it: for recorders and live
+/// publishers that take messages of any type.
+#[derive(Clone, Debug)]
+pub struct Encoded {
+    /// The type's name ([`Ros2Message::NAME`]).
+    pub name: &'static str,
+    /// Its definition ([`Ros2Message::definition`]).
+    pub definition: fn() -> String,
+    /// The message in CDR.
+    pub cdr: Vec<u8>,
+}
+
+impl Encoded {
+    /// `msg`, encoded.
+    pub fn of<M: Ros2Message>(msg: &M) -> Self {
+        Encoded {
+            name: M::NAME,
+            definition: M::definition,
+            cdr: msg.to_cdr(),
+        }
+    }
+}
+
 /// Builds a CDR little-endian message.
 #[derive(Debug)]
 pub struct CdrWriter {

@@ -23,6 +23,7 @@ macro_rules! say {
 
 pub mod check;
 pub mod drive;
+pub mod live;
 pub mod map;
 pub mod matchers;
 pub mod montecarlo;
@@ -80,6 +81,9 @@ pub enum CommandError {
     /// `twin view` cannot serve.
     #[error(transparent)]
     View(#[from] view::ViewError),
+    /// The live view cannot start.
+    #[error(transparent)]
+    Live(#[from] live::LiveError),
     /// A file cannot be opened or read.
     #[error("{}: {source}", path.display())]
     Read {

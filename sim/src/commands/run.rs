@@ -12,7 +12,8 @@ use robot::hardware::{
 };
 use robot::localization::{LevelLocaliser, MapConfig};
 
-use std::time::Instant;
+use robot::Stamp;
+use std::time::{Duration, Instant};
 
 /// Why a run failed.
 #[derive(Debug, thiserror::Error)]
@@ -47,6 +48,89 @@ pub struct RunOptions {
     pub seed: Option<u64>,
     /// Replaces the scenario's tour pacing.
     pub tour: Option<TourConfig>,
+    /// Publishes the run live, paced to the wall clock.
+    pub live: Option<Live>,
+}
+
+/// A run published live (`twin run --live`): its topics on a Foxglove WebSocket server, the
+/// simulation held back to `speed` × real time so a viewer sees the robot move.
+#[derive(Clone)]
+pub struct Live {
+    /// The server.
+    pub server: std::sync::Arc<super::live::LiveServer>,
+    /// Simulated seconds per wall-clock second.
+    pub speed: f64,
+}
+
+impl std::fmt::Debug for Live {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Live({}, {}x)", self.server.addr(), self.speed)
+    }
+}
+
+impl Live {
+    /// Publishes one scan's topics (and the estimates placed since the last call), after
+    /// waiting until the wall clock has caught up with the scan's stamp.
+    fn publish(
+        &self,
+        started: Instant,
+        scan: &robot::hardware::LaserScan,
+        odometry: robot::Pose2,
+        scenario: &Scenario,
+        estimates: &[robot::localization::Placed],
+    ) {
+        use crate::output::{RecordedScan, estimate_msg, scan_topics};
+        use robot::logs::ros2::Encoded;
+        let due = Duration::from_secs_f64(scan.stamp.secs_f64() / self.speed);
+        if let Some(wait) = due.checked_sub(started.elapsed()) {
+            std::thread::sleep(wait);
+        }
+        let recorded = RecordedScan {
+            scan,
+            odometry,
+            truth: None,
+        };
+        let scan_time = crate::output::scan_period_s(&scenario.robot.laser);
+        for (topic, msg) in scan_topics(&recorded, &scenario.robot.mount(), scan_time) {
+            self.server.publish(topic, scan.stamp, &msg);
+        }
+        for p in estimates {
+            self.server.publish(
+                "/estimate",
+                p.stamp,
+                &Encoded::of(&estimate_msg(p.stamp, p.estimate)),
+            );
+        }
+    }
+
+    /// Announces the run's topics and publishes its static transforms (the run does it before
+    /// its first step; calling it earlier lets a client subscribe before the run starts).
+    pub fn announce(&self, scenario: &Scenario) {
+        use crate::output::{estimate_msg, static_transforms};
+        use robot::logs::ros2::Encoded;
+        let statics = Encoded::of(&static_transforms(&scenario.robot.mount(), &[]));
+        self.server.publish("/tf_static", Stamp::ZERO, &statics);
+        let estimate = Encoded::of(&estimate_msg(Stamp::ZERO, robot::Pose2::IDENTITY));
+        let empty = robot::hardware::LaserScan {
+            stamp: Stamp::ZERO,
+            angle_min: 0.0,
+            angle_increment: 0.0,
+            range_max_mm: 0,
+            ranges_mm: Vec::new(),
+            head: None,
+        };
+        let example = crate::output::RecordedScan {
+            scan: &empty,
+            odometry: robot::Pose2::IDENTITY,
+            truth: None,
+        };
+        for (topic, msg) in crate::output::scan_topics(&example, &scenario.robot.mount(), 0.0) {
+            self.server.advertise(topic, &msg);
+        }
+        if scenario.localisation.is_some() {
+            self.server.advertise("/estimate", &estimate);
+        }
+    }
 }
 
 /// Runs a scenario to its end. `progress(done, total)` is called before each step.
@@ -86,6 +170,10 @@ pub fn run_scenario(
         LevelLocaliser::new(settings.matcher, scenario.robot.mount(), config)
     });
     let mut localising = 0.0;
+    let mut published_estimates = 0;
+    if let Some(live) = &options.live {
+        live.announce(&scenario);
+    }
     let report = {
         let mut observer = |event: TourEvent<'_>| match event {
             TourEvent::StepStarted { index, total, .. } => progress(index, total),
@@ -98,6 +186,17 @@ pub fn run_scenario(
                     let clock = Instant::now();
                     localiser.push(scan, odometry, scene);
                     localising += clock.elapsed().as_secs_f64();
+                }
+                if let Some(live) = &options.live {
+                    let placed = localiser.as_ref().map_or(&[][..], |l| l.placed());
+                    live.publish(
+                        started,
+                        scan,
+                        odometry,
+                        &scenario,
+                        &placed[published_estimates.min(placed.len())..],
+                    );
+                    published_estimates = placed.len();
                 }
                 kept.push((scan.clone(), odometry, scene));
             }
@@ -265,6 +364,13 @@ pub struct RunArgs {
     /// Seed replacing the scenario's.
     #[arg(long)]
     pub seed: Option<u64>,
+    /// Publish the run live over the Foxglove WebSocket protocol on this address (e.g.
+    /// 127.0.0.1:8765), paced to the wall clock × --speed.
+    #[arg(long, value_name = "ADDR")]
+    pub live: Option<String>,
+    /// With --live: simulated seconds per wall-clock second.
+    #[arg(long, default_value_t = 1.0, requires = "live")]
+    pub speed: f64,
     /// Print nothing but errors.
     #[arg(long, short)]
     pub quiet: bool,
@@ -276,12 +382,42 @@ pub fn main(args: RunArgs) -> Result<(), super::CommandError> {
     let scenario = Scenario::load(&args.scenario)?;
     let bar = super::step_bar(args.quiet, scenario.steps.len());
     bar.set_prefix(scenario.name.clone());
+    if !(args.speed > 0.0 && args.speed <= 1e6) {
+        return Err(CommandError::option(
+            "--speed",
+            "must be above 0 and at most 1e6",
+            args.speed,
+        ));
+    }
+    let live = match &args.live {
+        Some(addr) => {
+            let server = super::live::LiveServer::start(addr)?;
+            eprintln!(
+                "live: ws://{} (Foxglove: Open connection → Foxglove WebSocket), {}x real time",
+                server.addr(),
+                args.speed
+            );
+            Some(Live {
+                server: std::sync::Arc::new(server),
+                speed: args.speed,
+            })
+        }
+        None => None,
+    };
     let options = RunOptions {
         seed: args.seed,
+        live: live.clone(),
         ..RunOptions::default()
     };
     let record = run_scenario(&scenario, &options, |done, _| bar.set_position(done as u64))?;
     bar.finish_and_clear();
+    drop(options);
+    if let Some(live) = live {
+        // The queued messages go out before the connections close.
+        if let Ok(server) = std::sync::Arc::try_unwrap(live.server) {
+            server.stop();
+        }
+    }
     let dir = args
         .out
         .unwrap_or_else(|| std::path::PathBuf::from("out").join(&scenario.name));

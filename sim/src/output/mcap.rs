@@ -22,8 +22,8 @@ use crate::record::{Placement, SonarRecord};
 use robot::hardware::{HeadAngles, LaserScan, SPEED_OF_SOUND, echo_distance_m};
 use robot::logs::mcap::Recorder;
 use robot::logs::ros2::{
-    ClockMsg, Header, LaserScanMsg, LogMsg, OdometryMsg, PointCloudMsg, PoseStampedMsg, RangeMsg,
-    TfMessage, Transform, TransformStamped,
+    ClockMsg, Encoded, Header, LaserScanMsg, LogMsg, OdometryMsg, PointCloudMsg, PoseStampedMsg,
+    RangeMsg, TfMessage, Transform, TransformStamped,
 };
 use robot::mount::LaserMount;
 use robot::{Pose2, Stamp};
@@ -101,10 +101,10 @@ fn pose_msg(stamp: Stamp, frame: &str, pose: Pose2) -> PoseStampedMsg {
     }
 }
 
-fn write(path: &Path, r: &Recording) -> Result<u32, robot::logs::mcap::RecordError> {
-    let mut rec = Recorder::create(path)?;
-    // The fixed frames.
-    let mut statics = match r.mount {
+/// `/tf_static`: the laser on the base (fixed) or on the head's tilting plate, and the sonar
+/// transducers on the base.
+pub fn static_transforms(mount: &LaserMount, transducers: &[Pose2]) -> TfMessage {
+    let mut statics = match *mount {
         LaserMount::Fixed { pose, z } => vec![stamped(
             Stamp::ZERO,
             "base_link",
@@ -124,49 +124,53 @@ fn write(path: &Path, r: &Recording) -> Result<u32, robot::logs::mcap::RecordErr
             },
         )],
     };
-    if let Some((sonar, _)) = r.sonar {
-        for (n, p) in sonar.transducers.iter().enumerate() {
-            statics.push(stamped(
-                Stamp::ZERO,
-                "base_link",
-                &format!("sonar_{n}"),
-                Transform::planar(*p),
-            ));
-        }
-    }
-    rec.write("/tf_static", Stamp::ZERO, &TfMessage(statics))?;
-
-    // Scans with the poses at their stamps, and the estimate, in time order.
-    let mut estimate = r.estimate.iter().peekable();
-    let mut last = Stamp::ZERO;
-    for s in &r.scans {
-        let t = s.scan.stamp;
-        while let Some((at, pose)) = estimate.next_if(|(at, _)| *at < t) {
-            rec.write("/estimate", *at, &pose_msg(*at, "map", *pose))?;
-        }
-        rec.write("/clock", t, &ClockMsg(t))?;
-        let mut tf = vec![stamped(
-            t,
-            "odom",
+    for (n, p) in transducers.iter().enumerate() {
+        statics.push(stamped(
+            Stamp::ZERO,
             "base_link",
-            Transform::planar(s.odometry),
-        )];
-        if let Some(truth) = s.truth {
-            tf.push(stamped(
-                t,
-                "map",
-                "odom",
-                Transform::planar(truth.compose(&s.odometry.inverse())),
-            ));
-        }
-        if let Some(head) = s.scan.head {
-            tf.extend(head_transforms(&r.mount, t, head));
-        }
-        rec.write("/tf", t, &TfMessage(tf))?;
-        rec.write(
-            "/odom",
+            &format!("sonar_{n}"),
+            Transform::planar(*p),
+        ));
+    }
+    TfMessage(statics)
+}
+
+/// `/estimate`: the scan-matching pose in the map.
+pub fn estimate_msg(at: Stamp, pose: Pose2) -> PoseStampedMsg {
+    pose_msg(at, "map", pose)
+}
+
+/// What one scan puts on the topics, all stamped at its measurement: `/clock`, `/tf`, `/odom`,
+/// `/ground_truth` (when known) and `/scan`.
+pub fn scan_topics(
+    s: &RecordedScan,
+    mount: &LaserMount,
+    scan_time_s: f64,
+) -> Vec<(&'static str, Encoded)> {
+    let t = s.scan.stamp;
+    let mut tf = vec![stamped(
+        t,
+        "odom",
+        "base_link",
+        Transform::planar(s.odometry),
+    )];
+    if let Some(truth) = s.truth {
+        tf.push(stamped(
             t,
-            &OdometryMsg {
+            "map",
+            "odom",
+            Transform::planar(truth.compose(&s.odometry.inverse())),
+        ));
+    }
+    if let Some(head) = s.scan.head {
+        tf.extend(head_transforms(mount, t, head));
+    }
+    let mut out = vec![
+        ("/clock", Encoded::of(&ClockMsg(t))),
+        ("/tf", Encoded::of(&TfMessage(tf))),
+        (
+            "/odom",
+            Encoded::of(&OdometryMsg {
                 header: Header::new(t, "odom"),
                 child_frame_id: "base_link".into(),
                 pose: Transform::planar(s.odometry),
@@ -174,16 +178,39 @@ fn write(path: &Path, r: &Recording) -> Result<u32, robot::logs::mcap::RecordErr
                 linear: [0.0; 3],
                 angular: [0.0; 3],
                 twist_covariance: [0.0; 36],
-            },
-        )?;
-        if let Some(truth) = s.truth {
-            rec.write("/ground_truth", t, &pose_msg(t, "map", truth))?;
+            }),
+        ),
+    ];
+    if let Some(truth) = s.truth {
+        out.push(("/ground_truth", Encoded::of(&pose_msg(t, "map", truth))));
+    }
+    out.push(("/scan", Encoded::of(&scan_msg(s.scan, scan_time_s))));
+    out
+}
+
+fn write(path: &Path, r: &Recording) -> Result<u32, robot::logs::mcap::RecordError> {
+    let mut rec = Recorder::create(path)?;
+    let transducers = r.sonar.map_or(&[][..], |(s, _)| s.transducers.as_slice());
+    rec.write(
+        "/tf_static",
+        Stamp::ZERO,
+        &static_transforms(&r.mount, transducers),
+    )?;
+    // Scans with the poses at their stamps, and the estimate, in time order.
+    let mut estimate = r.estimate.iter().peekable();
+    let mut last = Stamp::ZERO;
+    for s in &r.scans {
+        let t = s.scan.stamp;
+        while let Some((at, pose)) = estimate.next_if(|(at, _)| *at < t) {
+            rec.write("/estimate", *at, &estimate_msg(*at, *pose))?;
         }
-        rec.write("/scan", t, &scan_msg(s.scan, r.scan_time_s))?;
+        for (topic, msg) in scan_topics(s, &r.mount, r.scan_time_s) {
+            rec.write_encoded(topic, t, &msg)?;
+        }
         last = last.max(t);
     }
     for (at, pose) in estimate {
-        rec.write("/estimate", *at, &pose_msg(*at, "map", *pose))?;
+        rec.write("/estimate", *at, &estimate_msg(*at, *pose))?;
         last = last.max(*at);
     }
     if let Some((sonar, [min, max])) = r.sonar {

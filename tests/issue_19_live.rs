@@ -1,0 +1,154 @@
+//! Issue 19, live view: `twin run --live` publishes the run's topics over the Foxglove WebSocket
+//! protocol, paced to the wall clock. A WebSocket client (tungstenite's, speaking the protocol
+//! from its specification) connects, reads `serverInfo` and the advertised channels, subscribes
+//! to `/scan` and the latched `/tf_static`, and decodes every message it gets: one `/scan` per
+//! scan of the run, stamped as the run stamped it, with the same ranges.
+
+use crate::common::scenario;
+use robot::logs::ros2::CdrReader;
+use sim::commands::live::{LiveServer, SUBPROTOCOL};
+use sim::commands::run::{Live, RunOptions, run_scenario};
+use std::collections::HashMap;
+use std::net::TcpStream;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use tungstenite::Message;
+use tungstenite::client::IntoClientRequest;
+use tungstenite::stream::MaybeTlsStream;
+
+type Client = tungstenite::WebSocket<MaybeTlsStream<TcpStream>>;
+
+fn connect(addr: std::net::SocketAddr) -> Client {
+    let mut request = format!("ws://{addr}").into_client_request().unwrap();
+    request
+        .headers_mut()
+        .insert("Sec-WebSocket-Protocol", SUBPROTOCOL.parse().unwrap());
+    let (ws, response) = tungstenite::connect(request).unwrap();
+    assert_eq!(response.headers()["Sec-WebSocket-Protocol"], SUBPROTOCOL);
+    if let MaybeTlsStream::Plain(s) = ws.get_ref() {
+        s.set_read_timeout(Some(Duration::from_secs(20))).unwrap();
+    }
+    ws
+}
+
+fn json(message: Message) -> serde_json::Value {
+    serde_json::from_str(message.to_text().expect("a text message")).unwrap()
+}
+
+#[test]
+fn a_client_subscribes_to_the_scans_and_decodes_every_one() {
+    let scenario = scenario("lab-tour");
+    let speed = 400.0;
+    let live = Live {
+        server: Arc::new(LiveServer::start("127.0.0.1:0").unwrap()),
+        speed,
+    };
+    live.announce(&scenario);
+    let mut ws = connect(live.server.addr());
+    let info = json(ws.read().unwrap());
+    assert_eq!(info["op"], "serverInfo");
+    let advertise = json(ws.read().unwrap());
+    assert_eq!(advertise["op"], "advertise");
+    let channels: HashMap<String, &serde_json::Value> = advertise["channels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| (c["topic"].as_str().unwrap().to_string(), c))
+        .collect();
+    for topic in ["/scan", "/odom", "/tf", "/tf_static", "/clock", "/estimate"] {
+        let c = channels
+            .get(topic)
+            .unwrap_or_else(|| panic!("{topic}: {advertise}"));
+        assert_eq!(c["encoding"], "cdr");
+        assert_eq!(c["schemaEncoding"], "ros2msg");
+    }
+    assert_eq!(channels["/scan"]["schemaName"], "sensor_msgs/msg/LaserScan");
+    ws.send(Message::text(
+        serde_json::json!({"op": "subscribe", "subscriptions": [
+            {"id": 10, "channelId": channels["/scan"]["id"]},
+            {"id": 11, "channelId": channels["/tf_static"]["id"]},
+        ]})
+        .to_string(),
+    ))
+    .unwrap();
+    while live.server.subscriptions() < 2 {
+        std::thread::sleep(Duration::from_millis(2));
+    }
+
+    let options = RunOptions {
+        live: Some(live.clone()),
+        ..RunOptions::default()
+    };
+    let started = Instant::now();
+    let run = std::thread::spawn(move || run_scenario(&scenario, &options, |_, _| {}).unwrap());
+    let mut scans = Vec::new();
+    let mut statics = 0;
+    let record = loop {
+        match ws.read() {
+            Ok(Message::Binary(frame)) => {
+                assert_eq!(frame[0], 1, "message data");
+                let id = u32::from_le_bytes(frame[1..5].try_into().unwrap());
+                let at = u64::from_le_bytes(frame[5..13].try_into().unwrap());
+                match id {
+                    10 => {
+                        let scan = CdrReader::new(&frame[13..]).unwrap().laser_scan().unwrap();
+                        assert_eq!(scan.header.stamp.0, at);
+                        scans.push(scan);
+                    }
+                    11 => {
+                        let tf = CdrReader::new(&frame[13..]).unwrap().tf().unwrap();
+                        assert!(tf.0.iter().any(|t| t.child_frame_id == "laser"));
+                        statics += 1;
+                    }
+                    other => panic!("subscription {other} was never made"),
+                }
+            }
+            Ok(_) => {}
+            Err(e) => panic!("the connection failed before the run ended: {e}"),
+        }
+        if run.is_finished() && scans.len() >= 46 {
+            break run.join().unwrap();
+        }
+    };
+    let wall = started.elapsed().as_secs_f64();
+    // The rest of the queue, then the server closes.
+    let server = Arc::try_unwrap(live.server)
+        .ok()
+        .expect("the run let go of the server");
+    let closing = std::thread::spawn(move || server.stop());
+    while let Ok(message) = ws.read() {
+        if let Message::Binary(frame) = message
+            && u32::from_le_bytes(frame[1..5].try_into().unwrap()) == 10
+        {
+            scans.push(CdrReader::new(&frame[13..]).unwrap().laser_scan().unwrap());
+        }
+    }
+    closing.join().unwrap();
+
+    assert!(
+        statics >= 1,
+        "the latched /tf_static reached a late subscriber"
+    );
+    assert_eq!(
+        scans.len(),
+        record.scans.len(),
+        "one /scan per scan of the run"
+    );
+    for (got, want) in scans.iter().zip(&record.scans) {
+        assert_eq!(got.header.stamp, want.scan.stamp);
+        assert_eq!(got.ranges.len(), want.scan.ranges_mm.len());
+        for (r, &mm) in got.ranges.iter().zip(&want.scan.ranges_mm) {
+            if mm >= want.scan.range_max_mm {
+                assert!(r.is_infinite());
+            } else {
+                assert_eq!(*r, (f64::from(mm) * 1e-3) as f32);
+            }
+        }
+    }
+    // Paced: the run waited for the wall clock to reach each scan's stamp / speed.
+    let last = record.scans.last().unwrap().scan.stamp.secs_f64();
+    assert!(
+        wall >= last / speed,
+        "{wall} s for a last scan at {last} s at {speed}x"
+    );
+}
