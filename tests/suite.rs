@@ -17,6 +17,7 @@ mod issue_18_honest_matches;
 mod issue_19_live;
 mod issue_19_maps;
 mod issue_19_recording;
+mod issue_19_replay;
 mod issue_2_bad_input;
 mod issue_2_collision;
 mod issue_2_contract;

@@ -35,6 +35,7 @@ pub mod mount;
 pub mod odometry;
 pub mod protocol;
 pub mod reconstruction;
+pub mod replay;
 pub mod serial;
 pub mod time;
 

@@ -77,6 +77,9 @@ pub struct RunRecord {
     pub localisation: Option<LocalisationRecord>,
     /// The 3D models of the run's scenes, when its script took any.
     pub reconstruction: Option<Reconstruction>,
+    /// Every call the controller made through the hardware contract, with its answer: what
+    /// `twin run --replay` plays back.
+    pub tape: Vec<robot::replay::Exchange>,
 }
 
 /// What the localisation made of a run's scans.

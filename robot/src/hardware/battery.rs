@@ -5,7 +5,7 @@ use crate::time::Stamp;
 /// The four battery voltages, millivolts: two pairs of 12 V lead-acid batteries, one pair for
 /// the electronics (microcontrollers, sonar, laser) and one for the motors, each measured at the
 /// middle (12 V) and top (24 V) of the pair.
-#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub struct BatteryVoltages {
     /// When the report was taken.
     pub stamp: Stamp,

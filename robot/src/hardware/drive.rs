@@ -18,7 +18,7 @@ pub const STATUS_COUNT_MODULUS: u32 = 6_553_600;
 /// count per tick every `period_ms` ticks until `top`, then lowers it the same way when braking.
 /// (The firmware's timer reloads with `period_ms` and acts when it has counted down, so one step
 /// takes `period_ms + 1` ticks of 1.024 ms — see `ac_control` in App. A.)
-#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub struct Ramp {
     /// Desired speed at the start of a move, counts per tick (`Pi`, 0..=90).
     pub initial: u16,
@@ -44,7 +44,7 @@ impl Default for Ramp {
 }
 
 /// One command of the base microcontroller that answers with its letter at once.
-#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum DriveCommand {
     /// `a c`: forward, each wheel `c` tenths of a motor turn.
     Advance(u16),
@@ -123,7 +123,7 @@ impl DriveCommand {
 ///
 /// The firmware only honours the flags when all three are sent (`w ms Fi Fd Fs`); with fewer
 /// arguments it simply waits `ms` ticks. The encoder sends the long form whenever a flag is set.
-#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub struct DriveWait {
     /// Longest wait, in control ticks of 1.024 ms (the firmware calls them milliseconds).
     pub max_ms: u16,
@@ -163,7 +163,7 @@ impl DriveWait {
 }
 
 /// The base's status report (`l Ci Cd Ei Ed Es`).
-#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub struct DriveStatus {
     /// When the firmware took this snapshot.
     pub stamp: Stamp,

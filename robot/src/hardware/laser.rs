@@ -17,7 +17,7 @@ use crate::time::Stamp;
 /// let (x, y) = scan.point(180).unwrap();
 /// assert!((x - 2.5).abs() < 1e-12 && y.abs() < 1e-12);
 /// ```
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LaserScan {
     /// When the scan was measured.
     pub stamp: Stamp,

@@ -41,7 +41,7 @@ pub use sonar::{
 use core::time::Duration;
 
 /// What kind of failure a hardware error is, independent of the backend.
-#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[non_exhaustive]
 pub enum ErrorKind {
     /// An argument is outside what the firmware documents; nothing was sent.

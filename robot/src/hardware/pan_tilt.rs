@@ -100,7 +100,7 @@ impl crate::odometry::Interpolate for HeadAngles {
 ///
 /// There is no stop: the firmware's `do_command` has no `p` (the prose's table lists one, the
 /// code ignores it without an answer).
-#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum PanTiltCommand {
     /// `g c`: pan to absolute position `c` (0..=254; the thesis's firmware stops at 248).
     Pan(u8),
@@ -149,7 +149,7 @@ impl PanTiltCommand {
 ///
 /// As the firmware is written (`check_end_wait`), only "wait for the pan alone" (`Fg` = 1,
 /// `Fe` = 0) ends early when the motor stops; every other form waits the full `max_ms`.
-#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub struct PanTiltWait {
     /// Longest wait, in control ticks of 1.024 ms.
     pub max_ms: u16,
@@ -161,7 +161,7 @@ pub struct PanTiltWait {
 
 /// The pan-tilt's status report, as `report_status` writes it:
 /// `l abs_giro g_giro_clicks abs_elev g_elev_clicks TopeIzq TopeDer TopeInf Eg Ee`.
-#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub struct PanTiltStatus {
     /// When the firmware took this snapshot.
     pub stamp: Stamp,

@@ -12,7 +12,7 @@ pub const SONAR_TIME_UNIT_S: f64 = 128.0 / 24.0e6;
 pub const SONAR_NO_ECHO: u16 = 65_535;
 
 /// One command of the sonar ring.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum SonarCommand {
     /// `S d0 d1 …`: the firing sequence, up to 16 transducer numbers.
     Sequence(Vec<u8>),
@@ -49,7 +49,7 @@ impl SonarCommand {
 }
 
 /// The latest echo time of each transducer of the firing sequence (`s` report).
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct SonarEchoes {
     /// When the report was taken.
     pub stamp: Stamp,

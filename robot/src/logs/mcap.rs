@@ -257,6 +257,46 @@ pub fn read_mcap(bytes: &[u8], file: &str) -> Result<RecordedLog, LogError> {
     Ok(log)
 }
 
+/// The topic a recording's tape of contract exchanges is on: one exchange a message, as JSON in a
+/// `std_msgs/String` (so ROS 2 tools play the file and show the tape as text).
+pub const TAPE_TOPIC: &str = "/hardware/tape";
+
+/// The contract exchanges recorded in an MCAP file ([`TAPE_TOPIC`]), in order.
+pub fn read_tape(bytes: &[u8], file: &str) -> Result<Vec<crate::replay::Exchange>, LogError> {
+    let malformed = |what: String| LogError::Malformed {
+        file: file.to_string(),
+        line: 0,
+        message: what,
+    };
+    let stream = mcap::MessageStream::new(bytes)
+        .map_err(|e| malformed(format!("not an MCAP file ({e})")))?;
+    let mut tape = Vec::new();
+    for (n, message) in stream.enumerate() {
+        let message = message.map_err(|e| malformed(format!("message {}: {e}", n + 1)))?;
+        if message.channel.topic != TAPE_TOPIC {
+            continue;
+        }
+        let bad = |e: String| {
+            malformed(format!(
+                "message {} on {TAPE_TOPIC} (exchange {}): {e}",
+                n + 1,
+                tape.len()
+            ))
+        };
+        let text = CdrReader::new(&message.data)
+            .and_then(CdrReader::string_msg)
+            .map_err(|e| bad(e.to_string()))?;
+        let exchange = serde_json::from_str(&text.0).map_err(|e| bad(e.to_string()))?;
+        tape.push(exchange);
+    }
+    if tape.is_empty() {
+        return Err(malformed(format!(
+            "no {TAPE_TOPIC} messages: a replay needs the contract's exchanges, which `twin run` and `twin drive` record"
+        )));
+    }
+    Ok(tape)
+}
+
 /// The planar pose of `frame` on the base by the chain of static transforms, if it reaches a
 /// base frame.
 fn static_mount(statics: &BTreeMap<String, TransformStamped>, frame: &str) -> Option<Pose2> {

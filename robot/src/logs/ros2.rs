@@ -470,6 +470,20 @@ impl Ros2Message for ClockMsg {
     }
 }
 
+/// `std_msgs/String`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StringMsg(pub String);
+
+impl Ros2Message for StringMsg {
+    const NAME: &'static str = "std_msgs/msg/String";
+    fn definition() -> String {
+        "string data\n".to_string()
+    }
+    fn encode(&self, w: &mut CdrWriter) {
+        w.string(&self.0);
+    }
+}
+
 /// `rcl_interfaces/Log`, as `/rosout` carries it: what a serial link reported.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LogMsg {
@@ -749,6 +763,11 @@ impl<'a> CdrReader<'a> {
             angular: self.f64s("twist.twist.angular")?,
             twist_covariance: self.f64s("twist.covariance")?,
         })
+    }
+
+    /// A `std_msgs/String`.
+    pub fn string_msg(mut self) -> Result<StringMsg, CdrError> {
+        Ok(StringMsg(self.string("data")?))
     }
 
     /// A `tf2_msgs/TFMessage`.

@@ -40,6 +40,8 @@ pub struct DriveRecord {
     /// The 3D models of the scenes, when the script took any (no truth out there: placed by
     /// the estimate and by odometry, not scored).
     pub reconstruction: Option<crate::record::Reconstruction>,
+    /// The controller's calls through the contract and their answers (empty when not taped).
+    pub tape: Vec<robot::replay::Exchange>,
 }
 
 /// Why a drive stopped.
@@ -155,6 +157,7 @@ where
         localisation,
         wall_seconds: started.elapsed().as_secs_f64(),
         reconstruction,
+        tape: Vec::new(),
     })
 }
 
@@ -292,6 +295,7 @@ pub fn write_drive(
                 .iter()
                 .map(|e| (e.stamp, e.device.to_string(), e.what.clone()))
                 .collect(),
+            tape: &record.tape,
         },
     )?;
     let pose = |p: &Pose2| [p.x, p.y, p.theta];
@@ -416,20 +420,23 @@ pub fn main(args: DriveArgs) -> Result<(), super::CommandError> {
     let config = serial_config(&scenario, args.base, args.pan_tilt, Some(args.laser));
     let clock: std::sync::Arc<dyn robot::Clock> =
         std::sync::Arc::new(super::serve::WallClock::new(args.time_scale));
-    let mut robot = SerialRobot::open(config, clock).map_err(CommandError::Open)?;
+    // Every call through the contract is taped, so the drive can be replayed (`twin run --replay`).
+    let mut robot =
+        robot::replay::Taped::new(SerialRobot::open(config, clock).map_err(CommandError::Open)?);
     let bar = super::step_bar(args.quiet, scenario.steps.len());
     bar.set_prefix(format!("drive {}", scenario.name));
     let result = drive_scenario(&mut robot, &scenario, args.matcher, |done, _| {
         bar.set_position(done as u64)
     });
     bar.finish_and_clear();
-    let events = robot.take_events();
+    let events = robot.inner_mut().take_events();
     if !args.quiet {
         for e in &events {
             eprintln!("{e}");
         }
     }
-    let record = result?;
+    let mut record = result?;
+    record.tape = robot.into_parts().1;
     let dir = args
         .out
         .unwrap_or_else(|| PathBuf::from("out").join(format!("drive-{}", scenario.name)));

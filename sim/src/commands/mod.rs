@@ -28,6 +28,7 @@ pub mod map;
 pub mod matchers;
 pub mod montecarlo;
 pub mod reconstruct;
+pub mod replay;
 pub mod run;
 pub mod serve;
 pub mod view;
@@ -84,6 +85,9 @@ pub enum CommandError {
     /// The live view cannot start.
     #[error(transparent)]
     Live(#[from] live::LiveError),
+    /// A replay failed.
+    #[error(transparent)]
+    Replay(#[from] replay::ReplayRunError),
     /// A file cannot be opened or read.
     #[error("{}: {source}", path.display())]
     Read {

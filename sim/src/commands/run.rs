@@ -8,9 +8,11 @@ use crate::record::{LocalisationRecord, RunRecord, ScanRecord, SonarRecord};
 use crate::twin::sim_robot::{GroundTruth, SimError, SimRobot};
 use robot::control::{TourConfig, TourError, TourEvent, run_tour};
 use robot::hardware::{
-    DriveBase, DriveWait, PanTilt, PanTiltPosition, PanTiltStatus, SonarCommand, SonarRing,
+    DriveBase, DriveWait, Laser, LaserScan, PanTilt, PanTiltPosition, PanTiltStatus, SonarCommand,
+    SonarRing,
 };
 use robot::localization::{LevelLocaliser, MapConfig};
+use robot::replay::Taped;
 
 use robot::Stamp;
 use std::time::{Duration, Instant};
@@ -133,31 +135,47 @@ impl Live {
     }
 }
 
-/// Runs a scenario to its end. `progress(done, total)` is called before each step.
-pub fn run_scenario(
+/// What the controller did through the contract, on any backend: the part of a run that a
+/// replay repeats.
+#[derive(Debug)]
+pub struct Controlled {
+    /// The scans the tour kept, with the odometry at their stamp and their scene.
+    pub kept: Vec<(LaserScan, robot::Pose2, Option<robot::control::SceneTag>)>,
+    /// The localisation, when the scenario asks for it.
+    pub localisation: Option<LocalisationRecord>,
+    /// The tour's report.
+    pub report: robot::control::TourReport,
+    /// The pan-tilt's status once at the scenario's position.
+    pub pan_tilt: Option<PanTiltStatus>,
+    /// The sonar ring's report at the end, when the scenario fires it.
+    pub echoes: Option<robot::hardware::SonarEchoes>,
+}
+
+/// The scenario's controller on `robot`: the head to its position, the sonar started, the
+/// tour with the localiser fed scan by scan (and the live view, if any), the ring read at the
+/// end. `ready` waits for what the backend needs before the head moves (the twin's power-up
+/// homing; nothing on a replay). The same calls in the same order on every backend, so a
+/// recording of them replays.
+pub fn control<R>(
+    robot: &mut R,
     scenario: &Scenario,
     options: &RunOptions,
+    ready: impl FnOnce(&mut R) -> Result<(), R::Error>,
     mut progress: impl FnMut(usize, usize),
-) -> Result<RunRecord, RunError> {
+) -> Result<Controlled, TourError<R::Error>>
+where
+    R: DriveBase + Laser + PanTilt + SonarRing,
+{
     let started = Instant::now();
-    let mut scenario = scenario.clone();
-    if let Some(seed) = options.seed {
-        scenario.seed = seed;
-    }
-    let mut robot = SimRobot::from_scenario(&scenario)?;
-    let tour_error = |source| RunError::Tour {
-        scenario: scenario.name.clone(),
-        source,
-    };
     let pan_tilt = match scenario.pan_tilt {
-        Some(target) => Some(
-            position_head(&mut robot, target)
-                .map_err(|e| tour_error(hardware_error("(pan-tilt)", e)))?,
-        ),
+        Some(target) => {
+            ready(robot).map_err(|e| hardware_error("(pan-tilt)", e))?;
+            Some(position_head(robot, target)?)
+        }
         None => None,
     };
     if let Some(sonar) = &scenario.sonar {
-        start_sonar(&mut robot, sonar).map_err(|e| tour_error(hardware_error("(sonar)", e)))?;
+        start_sonar(robot, sonar).map_err(|e| hardware_error("(sonar)", e))?;
     }
     let mut kept = Vec::new();
     let mut localiser = scenario.localisation.map(|settings| {
@@ -172,7 +190,7 @@ pub fn run_scenario(
     let mut localising = 0.0;
     let mut published_estimates = 0;
     if let Some(live) = &options.live {
-        live.announce(&scenario);
+        live.announce(scenario);
     }
     let report = {
         let mut observer = |event: TourEvent<'_>| match event {
@@ -193,7 +211,7 @@ pub fn run_scenario(
                         started,
                         scan,
                         odometry,
-                        &scenario,
+                        scenario,
                         &placed[published_estimates.min(placed.len())..],
                     );
                     published_estimates = placed.len();
@@ -202,23 +220,85 @@ pub fn run_scenario(
             }
         };
         run_tour(
-            &mut robot,
+            robot,
             scenario.robot.geometry(),
             scenario.world.start,
             &scenario.steps,
             options.tour.as_ref().unwrap_or(&scenario.tour),
             &mut observer,
-        )
-        .map_err(tour_error)?
+        )?
     };
-    let sonar = match &scenario.sonar {
-        Some(settings) => Some(
-            read_sonar_ring(&mut robot, settings)
-                .map_err(|e| tour_error(hardware_error("(sonar)", e)))?,
-        ),
+    let echoes = match &scenario.sonar {
+        Some(settings) => {
+            Some(read_sonar_ring(robot, settings).map_err(|e| hardware_error("(sonar)", e))?)
+        }
         None => None,
     };
     progress(report.steps, report.steps);
+    let localisation = localiser.map(|localiser| {
+        let matcher = localiser.kind();
+        let (placed, map) = localiser.finish();
+        LocalisationRecord {
+            matcher,
+            placed,
+            map,
+            wall_seconds: localising,
+        }
+    });
+    Ok(Controlled {
+        kept,
+        localisation,
+        report,
+        pan_tilt,
+        echoes,
+    })
+}
+
+/// Runs a scenario to its end. `progress(done, total)` is called before each step.
+pub fn run_scenario(
+    scenario: &Scenario,
+    options: &RunOptions,
+    progress: impl FnMut(usize, usize),
+) -> Result<RunRecord, RunError> {
+    let started = Instant::now();
+    let mut scenario = scenario.clone();
+    if let Some(seed) = options.seed {
+        scenario.seed = seed;
+    }
+    let mut taped = Taped::new(SimRobot::from_scenario(&scenario)?);
+    let controlled = control(
+        &mut taped,
+        &scenario,
+        options,
+        |r| r.inner_mut().wait_pan_tilt_ready(),
+        progress,
+    )
+    .map_err(|source| RunError::Tour {
+        scenario: scenario.name.clone(),
+        source,
+    })?;
+    let (robot, tape) = taped.into_parts();
+    let Controlled {
+        kept,
+        localisation,
+        report,
+        pan_tilt,
+        echoes,
+    } = controlled;
+    let sonar = echoes.map(|echoes| {
+        let model = robot
+            .twin()
+            .sonar()
+            .expect("the scenario checked the robot has a ring");
+        SonarRecord {
+            truth: robot.true_pose(),
+            transducers: (0..model.len())
+                .filter_map(|k| model.transducer(k))
+                .collect(),
+            cone: model.cone(),
+            echoes,
+        }
+    });
     // Scans are delivered after they were measured: the twin has simulated past every stamp.
     let scans: Vec<ScanRecord> = kept
         .into_iter()
@@ -238,16 +318,6 @@ pub fn run_scenario(
             }
         })
         .collect();
-    let localisation = localiser.map(|localiser| {
-        let matcher = localiser.kind();
-        let (placed, map) = localiser.finish();
-        LocalisationRecord {
-            matcher,
-            placed,
-            map,
-            wall_seconds: localising,
-        }
-    });
     // The 3D models of the scenes, placed by the estimate, the odometry and the truth.
     let mount = scenario.robot.mount();
     let inputs: Vec<SceneInput> = scans
@@ -287,6 +357,7 @@ pub fn run_scenario(
         pan_tilt,
         localisation,
         reconstruction,
+        tape,
     })
 }
 
@@ -295,22 +366,29 @@ const HEAD_POLL_MS: u16 = 50;
 /// Longest a head move may take, in polls (a full pan turn takes about 8 s).
 const HEAD_POLL_LIMIT: u32 = 1200;
 
-/// Waits for the pan-tilt to home, moves it to `target` and waits until both motors are off.
-fn position_head(robot: &mut SimRobot, target: PanTiltPosition) -> Result<PanTiltStatus, SimError> {
-    robot.wait_pan_tilt_ready()?;
-    let status = robot.move_pan_tilt_to(target, HEAD_POLL_MS, HEAD_POLL_LIMIT)?;
+/// Moves the head to `target` and waits until both motors are off.
+fn position_head<R: PanTilt>(
+    robot: &mut R,
+    target: PanTiltPosition,
+) -> Result<PanTiltStatus, TourError<R::Error>> {
+    let status = robot
+        .move_pan_tilt_to(target, HEAD_POLL_MS, HEAD_POLL_LIMIT)
+        .map_err(|e| hardware_error("(pan-tilt)", e))?;
     if status.idle() {
         Ok(status)
     } else {
-        Err(SimError::Timeout {
-            command: format!("g{} / e{} (head still moving)", target.pan, target.tilt),
-            waited: crate::twin::TICK * (u32::from(HEAD_POLL_MS) * HEAD_POLL_LIMIT),
+        Err(TourError::Stuck {
+            index: 0,
+            step: format!(
+                "(pan-tilt) g{} / e{}: head still moving",
+                target.pan, target.tilt
+            ),
+            timeout: crate::twin::TICK * (u32::from(HEAD_POLL_MS) * HEAD_POLL_LIMIT),
         })
     }
 }
 
-/// `S`, `s2 Te Tr`, `s1`: the ring starts firing.
-fn start_sonar(robot: &mut SimRobot, settings: &SonarSettings) -> Result<(), SimError> {
+fn start_sonar<R: SonarRing>(robot: &mut R, settings: &SonarSettings) -> Result<(), R::Error> {
     robot.sonar(SonarCommand::Sequence(settings.sequence.clone()))?;
     robot.sonar(SonarCommand::Timing {
         echo_ms: settings.echo_ms,
@@ -319,32 +397,19 @@ fn start_sonar(robot: &mut SimRobot, settings: &SonarSettings) -> Result<(), Sim
     robot.sonar(SonarCommand::Firing(true))
 }
 
-/// Waits, at rest, one full firing cycle and reads the ring.
-fn read_sonar_ring(
-    robot: &mut SimRobot,
+/// Waits for the ring to fire its whole sequence, then reads it.
+fn read_sonar_ring<R: DriveBase + SonarRing>(
+    robot: &mut R,
     settings: &SonarSettings,
-) -> Result<SonarRecord, SimError> {
+) -> Result<robot::hardware::SonarEchoes, R::Error> {
     // Each shot takes the fire tick, the echo window, the relax time and the step to the next.
     let cycle = settings.sequence.len() as u32
         * (u32::from(settings.echo_ms) + u32::from(settings.relax_ms) + 3);
     robot.wait_drive(DriveWait::sleep(cycle.min(u32::from(u16::MAX)) as u16))?;
-    let echoes = robot.sonar_echoes()?;
-    let model = robot
-        .twin()
-        .sonar()
-        .expect("the scenario checked the robot has a ring");
-    Ok(SonarRecord {
-        truth: robot.true_pose(),
-        transducers: (0..model.len())
-            .filter_map(|k| model.transducer(k))
-            .collect(),
-        cone: model.cone(),
-        echoes,
-    })
+    robot.sonar_echoes()
 }
 
-/// A hardware error before or after the script, reported as the tour's.
-fn hardware_error(step: &str, source: SimError) -> TourError<SimError> {
+fn hardware_error<E: robot::hardware::HardwareError>(step: &str, source: E) -> TourError<E> {
     TourError::Hardware {
         index: 0,
         step: step.into(),
@@ -371,15 +436,76 @@ pub struct RunArgs {
     /// With --live: simulated seconds per wall-clock second.
     #[arg(long, default_value_t = 1.0, requires = "live")]
     pub speed: f64,
+    /// Run the scenario's controller and localisation on a recording instead of the twin: the
+    /// hardware contract answered from FILE's tape (a run.mcap of twin run or twin drive).
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["live", "seed"])]
+    pub replay: Option<std::path::PathBuf>,
     /// Print nothing but errors.
     #[arg(long, short)]
     pub quiet: bool,
+}
+
+/// `twin run --replay`: the controller on the recording, the outputs of a drive.
+fn replay_main(
+    args: &RunArgs,
+    scenario: &Scenario,
+    file: &std::path::Path,
+) -> Result<(), super::CommandError> {
+    use super::CommandError;
+    let name = file.display().to_string();
+    let bytes = std::fs::read(file).map_err(|source| CommandError::Read {
+        path: file.to_path_buf(),
+        source,
+    })?;
+    let tape = robot::logs::mcap::read_tape(&bytes, &name)?;
+    let exchanges = tape.len();
+    let bar = super::step_bar(args.quiet, scenario.steps.len());
+    bar.set_prefix(format!("replay {}", scenario.name));
+    let record =
+        super::replay::replay_scenario(scenario, tape, |done, _| bar.set_position(done as u64))?;
+    bar.finish_and_clear();
+    let dir = args.out.clone().unwrap_or_else(|| {
+        std::path::PathBuf::from("out").join(format!("{}-replay", scenario.name))
+    });
+    let files = super::drive::write_drive(&record, scenario, &[], &dir).map_err(|source| {
+        CommandError::Write {
+            dir: dir.clone(),
+            source,
+        }
+    })?;
+    if !args.quiet {
+        say!(
+            "{}: replayed {exchanges} exchanges of {name}: {} steps, {} scans",
+            record.scenario,
+            record.steps,
+            record.scans.len()
+        );
+        if let Some((kind, placed, _)) = &record.localisation
+            && let Some(last) = placed.last()
+        {
+            let e = last.estimate;
+            say!(
+                "estimate ({kind}): ({:.3} m, {:.3} m, {:.2} deg)",
+                e.x,
+                e.y,
+                e.theta.to_degrees()
+            );
+        }
+        say!("wrote {}", dir.display());
+        for f in &files {
+            say!("  {}", f.display());
+        }
+    }
+    Ok(())
 }
 
 /// Runs `twin run`.
 pub fn main(args: RunArgs) -> Result<(), super::CommandError> {
     use super::CommandError;
     let scenario = Scenario::load(&args.scenario)?;
+    if let Some(file) = &args.replay {
+        return replay_main(&args, &scenario, file);
+    }
     let bar = super::step_bar(args.quiet, scenario.steps.len());
     bar.set_prefix(scenario.name.clone());
     if !(args.speed > 0.0 && args.speed <= 1e6) {

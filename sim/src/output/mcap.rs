@@ -13,6 +13,7 @@
 //! | `/points` | `sensor_msgs/PointCloud2` | at the end, when the run built a 3D model | `map` (or `odom` when placed by odometry) |
 //! | `/clock` | `rosgraph_msgs/Clock` | each scan | |
 //! | `/rosout` | `rcl_interfaces/Log` | each serial link event (a drive) | |
+//! | `/hardware/tape` | `std_msgs/String` | every call through the hardware contract and its answer, as JSON | |
 //!
 //! Frames follow REP-105: `odom` starts at the start pose, so the twin's odometry (world frame,
 //! starting at the start pose) is `odom` → `base_link` as it is, and the truth enters only as
@@ -23,7 +24,7 @@ use robot::hardware::{HeadAngles, LaserScan, SPEED_OF_SOUND, echo_distance_m};
 use robot::logs::mcap::Recorder;
 use robot::logs::ros2::{
     ClockMsg, Encoded, Header, LaserScanMsg, LogMsg, OdometryMsg, PointCloudMsg, PoseStampedMsg,
-    RangeMsg, TfMessage, Transform, TransformStamped,
+    RangeMsg, StringMsg, TfMessage, Transform, TransformStamped,
 };
 use robot::mount::LaserMount;
 use robot::{Pose2, Stamp};
@@ -57,6 +58,8 @@ pub struct Recording<'a> {
     pub points: Option<(Placement, &'a [[f32; 3]])>,
     /// Serial link events: stamp, device, what happened.
     pub link_events: Vec<(Stamp, String, String)>,
+    /// The controller's calls through the hardware contract and their answers, for a replay.
+    pub tape: &'a [robot::replay::Exchange],
 }
 
 /// Writes `recording` to `path`; returns the number of messages written.
@@ -261,6 +264,13 @@ fn write(path: &Path, r: &Recording) -> Result<u32, robot::logs::mcap::RecordErr
                 msg: what.clone(),
             },
         )?;
+    }
+    // The tape, each exchange at its answer's stamp (or the last stamp before it).
+    let mut at = Stamp::ZERO;
+    for exchange in r.tape {
+        at = exchange.stamp().map_or(at, |s| s.max(at));
+        let json = serde_json::to_string(exchange).expect("an exchange serialises");
+        rec.write(robot::logs::mcap::TAPE_TOPIC, at, &StringMsg(json))?;
     }
     let n = rec.messages();
     rec.finish()?;

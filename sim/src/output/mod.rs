@@ -97,6 +97,7 @@ fn recording<'a>(record: &'a RunRecord, scenario: &Scenario) -> Recording<'a> {
             (main.placement, main.model.vertices.as_slice())
         }),
         link_events: Vec::new(),
+        tape: &record.tape,
     }
 }
 
