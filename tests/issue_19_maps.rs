@@ -277,7 +277,10 @@ fn a_png_map_reads_too() {
     .unwrap();
     let map = MapImage::load(&dir.join("dot.yaml")).unwrap();
     assert_eq!(map.occupied.iter().filter(|&&o| o).count(), 1);
-    let walls = map.walls(Material::Matte, [0.0, 2.0]);
+    let walls = map.walls(
+        &sim::config::map_image::Palette::single(Material::Matte),
+        [0.0, 2.0],
+    );
     assert_eq!(walls.len(), 4);
     let xs: Vec<f64> = walls
         .iter()
@@ -288,4 +291,131 @@ fn a_png_map_reads_too() {
             .all(|&x| (x - 1.1).abs() < 1e-9 || (x - 1.2).abs() < 1e-9),
         "{xs:?}"
     );
+}
+
+/// The lab drawn as a Stage bitmap (`worlds/maps/lab-stage.png`, each material in its own grey:
+/// `sim::world::raster`) and read back through a world's `[map] bitmap` with its palette
+/// (`worlds/lab-stage.toml`): the shipped image is what the rasteriser draws today (set
+/// `REGENERATE_STAGE_BITMAP=1` to rewrite it), the walls come back with their materials, and the
+/// laser reads the lab.
+#[test]
+fn a_stage_bitmap_with_a_palette_reads_back_as_the_lab() {
+    use sim::config::{Material, Outliers, WorldDescription};
+    use sim::devices::laser::LaserModel;
+    use sim::world::raster::faces_bitmap;
+    let lab = WorldDescription::load(repo().join("worlds/lab.toml")).unwrap();
+    let drawn = faces_bitmap(&WorldMap::new(&lab), 0.05);
+    let shipped = repo().join("worlds/maps/lab-stage.png");
+    if std::env::var_os("REGENERATE_STAGE_BITMAP").is_some() {
+        std::fs::write(&shipped, drawn.png()).unwrap();
+        eprintln!(
+            "wrote {}: size [{:.2}, {:.2}], center [{:.3}, {:.3}]",
+            shipped.display(),
+            drawn.size[0],
+            drawn.size[1],
+            drawn.center[0],
+            drawn.center[1]
+        );
+    }
+    let decoder = png::Decoder::new(std::io::Cursor::new(std::fs::read(&shipped).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut pixels = vec![0; reader.output_buffer_size().unwrap()];
+    reader.next_frame(&mut pixels).unwrap();
+    assert_eq!(
+        (reader.info().width as usize, reader.info().height as usize),
+        (drawn.width, drawn.height)
+    );
+    assert!(
+        pixels == drawn.pixels,
+        "the shipped bitmap is not what the lab draws today"
+    );
+
+    let stage = WorldDescription::load(repo().join("worlds/lab-stage.toml")).unwrap();
+    for material in [
+        Material::Matte,
+        Material::Glass,
+        Material::Black,
+        Material::Metal,
+    ] {
+        assert!(
+            stage.walls.iter().any(|w| w.material == material),
+            "no {material:?} wall came back"
+        );
+    }
+    let robot = crate::common::robot("pioneer-3dx");
+    let laser = LaserModel::new(&robot.laser, robot.laser_mount(), 0.0, Outliers::NONE);
+    let (lab_map, stage_map) = (WorldMap::new(&lab), WorldMap::new(&stage));
+    let (mut close, mut returned) = (0, 0);
+    for start in [
+        lab.start,
+        robot::Pose2::new(4.0, 3.0, 1.0),
+        robot::Pose2::new(12.0, 3.0, 3.0),
+    ] {
+        let scan = |map: &WorldMap| {
+            let mut rng = sim::rng::stream(1, "laser");
+            laser
+                .scan(
+                    map,
+                    None,
+                    laser.frame_on(start),
+                    robot::Stamp::ZERO,
+                    &mut rng,
+                )
+                .ranges_mm
+        };
+        for (a, b) in scan(&lab_map).into_iter().zip(scan(&stage_map)) {
+            if a < 32_000 {
+                returned += 1;
+                close += usize::from((i32::from(a) - i32::from(b)).abs() <= 100);
+            }
+        }
+    }
+    assert!(returned > 300, "{returned} beams return");
+    assert!(
+        close as f64 >= 0.8 * returned as f64,
+        "{close} of {returned} returned beams within 10 cm of the hand-written lab"
+    );
+}
+
+/// A `[map]` that is neither one kind nor the other, or whose palette names a value or a
+/// material that does not exist, is refused with the field.
+#[test]
+fn a_bad_map_table_names_its_field() {
+    use sim::config::WorldDescription;
+    let path = repo().join("worlds/bad-map.toml");
+    let cases = [
+        (
+            "[map]\nyaml = \"maps/lab-tour.yaml\"\nbitmap = \"maps/lab-stage.png\"\n",
+            "either `yaml`",
+        ),
+        ("[map]\nbitmap = \"maps/lab-stage.png\"\n", "map.size"),
+        (
+            "[map]\nbitmap = \"maps/lab-stage.png\"\nsize = [1, -2, 1]\n",
+            "map.size",
+        ),
+        (
+            "[map]\nbitmap = \"maps/lab-stage.png\"\nsize = [1, 2, 1]\npose = [0, 0, 0, 90]\n",
+            "map.pose",
+        ),
+        (
+            "[map]\nbitmap = \"maps/lab-stage.png\"\nsize = [1, 2, 1]\n[map.materials]\n\"300\" = \"glass\"\n",
+            "map.materials.300",
+        ),
+        (
+            "[map]\nyaml = \"maps/lab-tour.yaml\"\n[map.materials]\n\"0\" = \"velvet\"\n",
+            "velvet",
+        ),
+        (
+            "[map]\nbitmap = \"maps/none.png\"\nsize = [1, 2, 1]\n",
+            "none.png",
+        ),
+    ];
+    for (table, expected) in cases {
+        let text = format!("name = \"bad\"\n[start]\nx = 0\ny = 0\n{table}");
+        let err = WorldDescription::parse(&text, path.to_str().unwrap())
+            .expect_err(table)
+            .to_string();
+        assert!(err.contains(expected), "{table}: {err}");
+        assert!(err.contains("bad-map.toml"), "{err}");
+    }
 }

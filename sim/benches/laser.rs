@@ -14,8 +14,9 @@
 //! Beside them, the sweep's geometry alone (`cast_plane_fan` and each beam's first surface, no
 //! optics, no noise): the ray-casting limit a whole scan is measured against.
 //!
-//! The last world is made from an occupancy image (`worlds/lab-from-map.toml`): walls traced
-//! around the lab tour's map, to compare with the hand-written lab.
+//! The last two worlds are made from images: walls traced around the lab tour's occupancy map
+//! (`worlds/lab-from-map.toml`) and around the lab drawn as a Stage bitmap with a palette
+//! (`worlds/lab-stage.toml`), to compare with the hand-written lab.
 //!
 //! Figures are the best of 15 rounds (the least disturbed by the machine's other work).
 //!
@@ -92,6 +93,10 @@ fn main() {
         (
             "lab from its map",
             WorldDescription::load(root().join("worlds/lab-from-map.toml")).unwrap(),
+        ),
+        (
+            "lab from a Stage bitmap",
+            WorldDescription::load(root().join("worlds/lab-stage.toml")).unwrap(),
         ),
     ];
     for (name, world) in &worlds {

@@ -1,20 +1,51 @@
-//! Worlds made from the maps people already have: an occupancy image (`.pgm` or `.png`) and its
-//! `map.yaml` in the ROS `map_server` convention (`image`, `resolution`, `origin`, `negate`,
-//! `occupied_thresh`; a cell is occupied when `(255 − value) / 255` — or `value / 255` with
-//! `negate: 1` — exceeds the threshold). Occupied cells become walls: the outline of each occupied
-//! region, its edges merged along rows and columns into as few straight segments as the pixels
-//! allow, so a map costs the laser what its shape costs, not what its pixels do.
+//! Worlds made from the maps people already have, in either convention:
+//!
+//! - ROS `map_server`: an occupancy image (`.pgm` or `.png`) and its `map.yaml` (`image`,
+//!   `resolution`, `origin`, `negate`, `occupied_thresh`; a cell is occupied when
+//!   `(255 − value) / 255` — or `value / 255` with `negate: 1` — exceeds the threshold);
+//! - Stage's bitmaps (`floorplan( bitmap "…" size [x y z] pose [x y z a] )`): the image is
+//!   stretched over `size` and centred on `pose`, and a pixel is occupied when its first channel
+//!   is 127 or darker (Stage's `stg_rotrects_from_image_file`).
+//!
+//! Occupied cells become walls: the outline of each occupied region, its edges merged along rows
+//! and columns into as few straight segments as the pixels allow, so a map costs the laser what
+//! its shape costs, not what its pixels do. Each wall takes the material of the occupied cell it
+//! bounds: the default, or the one a [`Palette`] gives that cell's pixel value (glass drawn in
+//! one grey, black furniture in another).
 
 use super::error::{ConfigError, resolve};
 use super::world::Wall;
 use crate::config::Material;
 use std::path::{Path, PathBuf};
 
+/// The material of each occupied cell: one for all, or by the cell's pixel value.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Palette {
+    /// The material of occupied cells whose value is not listed.
+    pub default: Material,
+    /// Materials by pixel value (0–255).
+    pub by_value: std::collections::BTreeMap<u8, Material>,
+}
+
+impl Palette {
+    /// Every occupied cell of `material`.
+    pub fn single(material: Material) -> Self {
+        Palette {
+            default: material,
+            by_value: Default::default(),
+        }
+    }
+
+    fn material(&self, value: u8) -> Material {
+        self.by_value.get(&value).copied().unwrap_or(self.default)
+    }
+}
+
 /// An occupancy image placed in the world.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MapImage {
-    /// Side of a cell, metres.
-    pub resolution: f64,
+    /// Size of a cell, metres: across (x) and up (y).
+    pub resolution: [f64; 2],
     /// World coordinates of the lower-left corner of the image, metres.
     pub origin: [f64; 2],
     /// Cells across and up.
@@ -23,6 +54,8 @@ pub struct MapImage {
     pub height: usize,
     /// Whether each cell is occupied, row by row from the *top* (as the image is stored).
     pub occupied: Vec<bool>,
+    /// Each cell's pixel value (grey, or the first channel for a Stage bitmap), same order.
+    pub values: Vec<u8>,
 }
 
 /// Images larger than this many cells are refused (a 50 km² map at 5 cm).
@@ -133,7 +166,7 @@ impl MapImage {
         }
         let (image_line, image) = get("image")?;
         let image_path = resolve(yaml, image);
-        let (width, height, values) = read_gray(&image_path)
+        let (width, height, values) = read_image(&image_path, Channel::Gray)
             .map_err(|message| error(yaml, Some(*image_line), Some("image"), message))?;
         let occupied = values
             .iter()
@@ -147,11 +180,34 @@ impl MapImage {
             })
             .collect();
         Ok(MapImage {
-            resolution,
+            resolution: [resolution; 2],
             origin: [origin[0], origin[1]],
             width,
             height,
             occupied,
+            values,
+        })
+    }
+
+    /// A Stage bitmap: the image at `bitmap` stretched over `size` (x, y metres) and centred on
+    /// `center`; a pixel is occupied when its first channel is 127 or darker.
+    pub fn stage(bitmap: &Path, size: [f64; 2], center: [f64; 2]) -> Result<Self, String> {
+        let (width, height, values) = read_image(&bitmap.to_path_buf(), Channel::First)?;
+        Ok(MapImage {
+            resolution: [size[0] / width as f64, size[1] / height as f64],
+            origin: [center[0] - size[0] / 2.0, center[1] - size[1] / 2.0],
+            width,
+            height,
+            occupied: values.iter().map(|&v| v <= STAGE_THRESHOLD).collect(),
+            values,
+        })
+    }
+
+    /// The material of the occupied cell at (`column`, `row_from_bottom`), if it is one.
+    fn class(&self, palette: &Palette, column: i64, row_from_bottom: i64) -> Option<Material> {
+        self.at(column, row_from_bottom).then(|| {
+            let i = (self.height - 1 - row_from_bottom as usize) * self.width + column as usize;
+            palette.material(self.values[i])
         })
     }
 
@@ -163,40 +219,64 @@ impl MapImage {
         c < self.width && r < self.height && self.occupied[(self.height - 1 - r) * self.width + c]
     }
 
-    /// The outline of the occupied cells as walls of `material` from `z[0]` to `z[1]`: each
-    /// border between an occupied cell and a free one (or the image's edge), merged along its row
-    /// or column into the longest straight pieces.
-    pub fn walls(&self, material: Material, z: [f64; 2]) -> Vec<Wall> {
-        let r = self.resolution;
+    /// The outline of the occupied cells as walls from `z[0]` to `z[1]`, each of the material
+    /// `palette` gives the occupied cell it bounds: each border between an occupied cell and a
+    /// free one (or the image's edge), merged along its row or column into the longest straight
+    /// pieces of one material.
+    pub fn walls(&self, palette: &Palette, z: [f64; 2]) -> Vec<Wall> {
+        let [rx, ry] = self.resolution;
         let point = |c: i64, row: i64| {
             [
-                self.origin[0] + c as f64 * r,
-                self.origin[1] + row as f64 * r,
+                self.origin[0] + c as f64 * rx,
+                self.origin[1] + row as f64 * ry,
             ]
         };
-        let wall = |a: [f64; 2], b: [f64; 2]| Wall {
+        let wall = |material, a: [f64; 2], b: [f64; 2]| Wall {
             material,
             points: vec![a, b],
             closed: false,
             z,
         };
+        let mut materials: Vec<Material> = std::iter::once(palette.default)
+            .chain(palette.by_value.values().copied())
+            .collect();
+        materials.sort_by_key(|m| *m as u8);
+        materials.dedup();
         let (w, h) = (self.width as i64, self.height as i64);
         let mut walls = Vec::new();
-        // Horizontal borders: between row y−1 and row y, one run per side that is occupied.
-        for y in 0..=h {
-            for below in [true, false] {
-                let border = |x| self.at(x, y - 1) != self.at(x, y) && self.at(x, y - 1) == below;
-                for (start, end) in runs(w, border) {
-                    walls.push(wall(point(start, y), point(end, y)));
+        for &m in &materials {
+            // A border of material m: one side occupied by m, the other free.
+            let border = |a: Option<Material>, b: Option<Material>, a_side: bool| {
+                a.is_some() != b.is_some() && a.is_some() == a_side && a.or(b) == Some(m)
+            };
+            // Horizontal borders: between row y−1 and row y.
+            for y in 0..=h {
+                for below in [true, false] {
+                    let at = |x| {
+                        border(
+                            self.class(palette, x, y - 1),
+                            self.class(palette, x, y),
+                            below,
+                        )
+                    };
+                    for (start, end) in runs(w, at) {
+                        walls.push(wall(m, point(start, y), point(end, y)));
+                    }
                 }
             }
-        }
-        // Vertical borders: between column x−1 and column x.
-        for x in 0..=w {
-            for left in [true, false] {
-                let border = |y| self.at(x - 1, y) != self.at(x, y) && self.at(x - 1, y) == left;
-                for (start, end) in runs(h, border) {
-                    walls.push(wall(point(x, start), point(x, end)));
+            // Vertical borders: between column x−1 and column x.
+            for x in 0..=w {
+                for left in [true, false] {
+                    let at = |y| {
+                        border(
+                            self.class(palette, x - 1, y),
+                            self.class(palette, x, y),
+                            left,
+                        )
+                    };
+                    for (start, end) in runs(h, at) {
+                        walls.push(wall(m, point(x, start), point(x, end)));
+                    }
                 }
             }
         }
@@ -221,8 +301,20 @@ fn runs(n: i64, border: impl Fn(i64) -> bool) -> Vec<(i64, i64)> {
     found
 }
 
-/// Width, height and 8-bit grey values (top row first) of a binary PGM (`P5`) or a PNG.
-fn read_gray(path: &PathBuf) -> Result<(usize, usize, Vec<u8>), String> {
+/// A Stage bitmap's pixel is free above this value of its first channel.
+const STAGE_THRESHOLD: u8 = 127;
+
+/// Which value of a colour pixel is read.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+enum Channel {
+    /// Its luminance (Rec. 601 weights), as map tools read colour maps.
+    Gray,
+    /// Its first channel (red), as Stage reads bitmaps.
+    First,
+}
+
+/// Width, height and 8-bit values (top row first) of a binary PGM (`P5`) or a PNG.
+fn read_image(path: &PathBuf, channel: Channel) -> Result<(usize, usize, Vec<u8>), String> {
     let bytes = std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
     let name = path.display();
     if bytes.starts_with(b"P5") {
@@ -278,6 +370,7 @@ fn read_gray(path: &PathBuf) -> Result<(usize, usize, Vec<u8>), String> {
             .chunks(channels)
             .map(|px| match channels {
                 1 | 2 => px[0],
+                _ if channel == Channel::First => px[0],
                 _ => {
                     ((u32::from(px[0]) * 299 + u32::from(px[1]) * 587 + u32::from(px[2]) * 114)
                         / 1000) as u8
@@ -302,11 +395,46 @@ fn check_size(name: &str, width: usize, height: usize) -> Result<(), String> {
 mod tests {
     use super::*;
 
+    /// Two occupied cells side by side, one drawn in the glass grey: each keeps its material,
+    /// and no wall stands between them.
+    #[test]
+    fn a_palette_gives_each_cell_its_material() {
+        let map = MapImage {
+            resolution: [1.0, 2.0],
+            origin: [0.0, 0.0],
+            width: 2,
+            height: 1,
+            occupied: vec![true, true],
+            values: vec![0, 100],
+        };
+        let palette = Palette {
+            default: Material::Matte,
+            by_value: [(100, Material::Glass)].into(),
+        };
+        let walls = map.walls(&palette, [0.0, 1.0]);
+        let glass: Vec<_> = walls
+            .iter()
+            .filter(|w| w.material == Material::Glass)
+            .map(|w| (w.points[0], w.points[1]))
+            .collect();
+        // The glass cell's right side, its bottom and top halves; nothing at x = 1 between the two.
+        assert!(glass.contains(&([2.0, 0.0], [2.0, 2.0])), "{glass:?}");
+        assert!(glass.contains(&([1.0, 0.0], [2.0, 0.0])), "{glass:?}");
+        assert!(glass.contains(&([1.0, 2.0], [2.0, 2.0])), "{glass:?}");
+        assert_eq!(glass.len(), 3);
+        assert!(
+            walls
+                .iter()
+                .all(|w| w.points[0][0] != 1.0 || w.points[1][0] != 1.0)
+        );
+        assert_eq!(walls.len(), 6, "{walls:?}");
+    }
+
     #[test]
     fn a_square_block_becomes_four_walls() {
         // 4 × 3 image, a 2 × 2 block of occupied cells at columns 1–2, the two top rows.
         let map = MapImage {
-            resolution: 0.5,
+            resolution: [0.5; 2],
             origin: [10.0, 20.0],
             width: 4,
             height: 3,
@@ -315,8 +443,9 @@ mod tests {
                 false, true, true, false, //
                 false, false, false, false,
             ],
+            values: vec![0; 12],
         };
-        let walls = map.walls(Material::Matte, [0.0, 2.0]);
+        let walls = map.walls(&Palette::single(Material::Matte), [0.0, 2.0]);
         assert_eq!(walls.len(), 4, "{walls:?}");
         let mut ends: Vec<_> = walls.iter().map(|w| (w.points[0], w.points[1])).collect();
         ends.sort_by(|a, b| a.partial_cmp(b).unwrap());

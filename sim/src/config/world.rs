@@ -41,7 +41,7 @@
 //! Frames follow REP-103: x and y in metres in the world frame, headings counter-clockwise.
 
 use super::error::{ConfigError, Source, resolve};
-use super::map_image::MapImage;
+use super::map_image::{MapImage, Palette};
 use super::values::{Angle, UnitInterval, show};
 use robot::Pose2;
 use serde::Deserialize;
@@ -288,8 +288,81 @@ impl WorldDescription {
                     format!("expected a height in (0, ceiling = {ceiling}], found {height}"),
                 ));
             }
-            let image = MapImage::load(&resolve(&source.path, map.yaml.get_ref()))?;
-            walls.extend(image.walls(material, [0.0, height]));
+            let mut palette = Palette::single(material);
+            for (value, name) in map.materials.iter().flatten() {
+                let field = format!("map.materials.{value}");
+                let v = value.parse::<u8>().map_err(|_| {
+                    source.error(
+                        name.span(),
+                        Some(field.clone()),
+                        format!("`{value}` is not a pixel value: expected 0 to 255"),
+                    )
+                })?;
+                palette
+                    .by_value
+                    .insert(v, self::material(source, name, Some(field))?);
+            }
+            let image = match (&map.yaml, &map.bitmap) {
+                (Some(yaml), None) => {
+                    if let Some(size) = &map.size {
+                        return Err(source.error(
+                            size.span(),
+                            Some("map.size".into()),
+                            "`size` is for a Stage `bitmap`; a map.yaml gives its own resolution",
+                        ));
+                    }
+                    MapImage::load(&resolve(&source.path, yaml.get_ref()))?
+                }
+                (None, Some(bitmap)) => {
+                    let size = map.size.as_ref().ok_or_else(|| {
+                        source.error(
+                            bitmap.span(),
+                            Some("map.size".into()),
+                            "a Stage `bitmap` needs `size = [x, y, z]` in metres (Stage's floorplan size)",
+                        )
+                    })?;
+                    let [sx, sy, sz] = *size.get_ref();
+                    if ![sx, sy, sz]
+                        .iter()
+                        .all(|v| *v > 0.0 && *v <= MAX_COORDINATE_M)
+                    {
+                        return Err(source.error(
+                            size.span(),
+                            Some("map.size".into()),
+                            format!("expected three sizes in (0, {MAX_COORDINATE_M}] metres, found {:?}", [sx, sy, sz]),
+                        ));
+                    }
+                    let pose = map.pose.as_ref().map_or([0.0; 4], |p| *p.get_ref());
+                    if pose[3] != 0.0
+                        || pose[..2]
+                            .iter()
+                            .any(|v| v.is_nan() || v.abs() > MAX_COORDINATE_M)
+                    {
+                        let span = map.pose.as_ref().map_or(0..0, |p| p.span());
+                        return Err(source.error(
+                            span,
+                            Some("map.pose".into()),
+                            format!("expected [x, y, z, yaw] with yaw 0 and x, y within {MAX_COORDINATE_M} m, found {pose:?}"),
+                        ));
+                    }
+                    let path = resolve(&source.path, bitmap.get_ref());
+                    MapImage::stage(&path, [sx, sy], [pose[0], pose[1]]).map_err(|message| {
+                        source.error(bitmap.span(), Some("map.bitmap".into()), message)
+                    })?
+                }
+                _ => {
+                    return Err(source.error_in_file(
+                        Some("map".into()),
+                        "give either `yaml` (a ROS map.yaml) or `bitmap` with `size` (a Stage bitmap), not both or neither",
+                    ));
+                }
+            };
+            // A Stage bitmap's height is its size's z unless `height_m` says otherwise.
+            let height = match (&map.bitmap, &map.height_m, &map.size) {
+                (Some(_), None, Some(size)) => size.get_ref()[2].min(ceiling),
+                _ => height,
+            };
+            walls.extend(image.walls(&palette, [0.0, height]));
         }
         let optics = file
             .optics
@@ -507,7 +580,15 @@ struct WorldFile {
 #[serde(deny_unknown_fields)]
 struct MapFile {
     /// The `map.yaml`, relative to the world file.
-    yaml: Spanned<String>,
+    yaml: Option<Spanned<String>>,
+    /// Or a Stage bitmap, relative to the world file…
+    bitmap: Option<Spanned<String>>,
+    /// …stretched over this size `[x, y, z]`, metres…
+    size: Option<Spanned<[f64; 3]>>,
+    /// …centred on this pose `[x, y, z, yaw]` (yaw 0).
+    pose: Option<Spanned<[f64; 4]>>,
+    /// Materials by pixel value (`"100" = "glass"`).
+    materials: Option<std::collections::BTreeMap<String, Spanned<String>>>,
     #[serde(default = "matte")]
     material: Spanned<String>,
     /// Height of the walls, metres (default: the ceiling).

@@ -6,6 +6,7 @@ pub mod clutter;
 mod fan;
 mod index;
 mod map;
+pub mod raster;
 pub mod score;
 
 pub use fan::{FAN_MAX_FACES, FanCast, PlaneFan};
