@@ -218,17 +218,41 @@ impl OccupancyGrid {
             },
         ];
         let limit = (last[0] - at[0]).unsigned_abs() + (last[1] - at[1]).unsigned_abs();
-        for _ in 0..limit {
-            if at == last {
-                break;
+        // The grid's bounds hold every beam with a margin, so the walk stays inside it: it
+        // follows the cell's index (a column step is ±1, a row step ±width) and `add`'s checks
+        // are needed only at the ends.
+        let inside = |c: [i64; 2]| {
+            c[0] >= 0 && c[1] >= 0 && (c[0] as usize) < self.width && (c[1] as usize) < self.height
+        };
+        if inside(at) && inside(last) {
+            let width = self.width as i64;
+            let (mut index, end) = (at[1] * width + at[0], last[1] * width + last[0]);
+            let index_step = [step[0], step[1] * width];
+            let (miss, clamp) = (self.config.miss, self.config.clamp);
+            for _ in 0..limit {
+                if index == end {
+                    break;
+                }
+                if let Some(v) = self.log_odds.get_mut(index as usize) {
+                    *v = (*v + miss).max(-clamp);
+                }
+                let k = usize::from(t_max[0] >= t_max[1]);
+                index += index_step[k];
+                t_max[k] += t_delta[k];
             }
-            self.add(at, self.config.miss);
-            if t_max[0] < t_max[1] {
-                at[0] += step[0];
-                t_max[0] += t_delta[0];
-            } else {
-                at[1] += step[1];
-                t_max[1] += t_delta[1];
+        } else {
+            for _ in 0..limit {
+                if at == last {
+                    break;
+                }
+                self.add(at, self.config.miss);
+                if t_max[0] < t_max[1] {
+                    at[0] += step[0];
+                    t_max[0] += t_delta[0];
+                } else {
+                    at[1] += step[1];
+                    t_max[1] += t_delta[1];
+                }
             }
         }
         let end = if hit {

@@ -169,60 +169,87 @@ pub struct Written {
 }
 
 /// Writes every output of a run into `dir` (created if needed).
+///
+/// The files are independent, so the costly ones are written side by side on their own threads
+/// (the map picture, the recording, the occupancy grid, the 3D model's files) while this one
+/// writes the rest: each file's bytes are what one thread would write, and the list comes back in
+/// one fixed order.
 pub fn write_all(record: &RunRecord, scenario: &Scenario, dir: &Path) -> std::io::Result<Written> {
     std::fs::create_dir_all(dir)?;
-    let mut files = Vec::new();
-    let mut file = |name: &str| {
-        let path = dir.join(name);
-        files.push(path.clone());
-        path
-    };
-    write_tum(
-        &file("truth.tum"),
-        record.scans.iter().map(|r| (r.scan.stamp, r.truth)),
-    )?;
-    write_tum(
-        &file("odometry.tum"),
-        record.scans.iter().map(|r| (r.scan.stamp, r.odometry)),
-    )?;
-    if let Some(loc) = &record.localisation {
-        write_tum(
-            &file("estimate.tum"),
-            loc.placed.iter().map(|p| (p.stamp, p.estimate)),
-        )?;
-    }
-    write_scans(&file("scans.jsonl"), &record.scans, &scenario.robot.mount())?;
-    Summary::of(record, (&scenario.world.name, &scenario.robot.name))
-        .write(&file("summary.json"))?;
-    if let Some(sonar) = &record.sonar {
-        write_sonar(&file("sonar.json"), sonar)?;
-    }
+    let path = |name: &str| dir.join(name);
     // One map of the world answers every picture's and file's questions about it.
     let map = crate::world::WorldMap::new(&scenario.world);
-    write_map_svg(&file("map.svg"), record, &scenario.world, &map)?;
-    write_world_json(&file("world.json"), scenario, &map)?;
-    if let Some(scan) = last_tilted(record) {
-        write_tilted_svg(
-            &file("tilted-scan.svg"),
-            scan,
-            &scenario.world,
-            &map,
-            &record.scenario,
-        )?;
-    }
-    write_mcap(&file("run.mcap"), &recording(record, scenario))?;
-    files.extend(write_grid(
-        dir,
-        level_scans(record, scenario).iter().map(|(p, s)| (*p, s)),
-    )?);
-    if let Some(recon) = &record.reconstruction {
-        files.extend(write_reconstruction(
-            dir,
-            recon,
-            &record.scenario,
-            Some(&map),
-        )?);
-    }
+    let map = &map;
+    let (pictures, recording_file, grid, reconstruction, rest) = std::thread::scope(|s| {
+        let pictures = s.spawn(|| -> std::io::Result<Vec<PathBuf>> {
+            let mut files = vec![path("map.svg"), path("world.json")];
+            write_map_svg(&files[0], record, &scenario.world, map)?;
+            write_world_json(&files[1], scenario, map)?;
+            if let Some(scan) = last_tilted(record) {
+                files.push(path("tilted-scan.svg"));
+                write_tilted_svg(&files[2], scan, &scenario.world, map, &record.scenario)?;
+            }
+            Ok(files)
+        });
+        let recording_file = s.spawn(|| {
+            write_mcap(&path("run.mcap"), &recording(record, scenario))
+                .map(|_| vec![path("run.mcap")])
+        });
+        let grid = s.spawn(|| {
+            write_grid(
+                dir,
+                level_scans(record, scenario).iter().map(|(p, s)| (*p, s)),
+            )
+        });
+        let reconstruction = s.spawn(|| match &record.reconstruction {
+            Some(recon) => write_reconstruction(dir, recon, &record.scenario, Some(map)),
+            None => Ok(Vec::new()),
+        });
+        let rest = (|| -> std::io::Result<Vec<PathBuf>> {
+            let mut files = vec![path("truth.tum"), path("odometry.tum")];
+            write_tum(
+                &files[0],
+                record.scans.iter().map(|r| (r.scan.stamp, r.truth)),
+            )?;
+            write_tum(
+                &files[1],
+                record.scans.iter().map(|r| (r.scan.stamp, r.odometry)),
+            )?;
+            if let Some(loc) = &record.localisation {
+                files.push(path("estimate.tum"));
+                write_tum(
+                    &path("estimate.tum"),
+                    loc.placed.iter().map(|p| (p.stamp, p.estimate)),
+                )?;
+            }
+            files.push(path("scans.jsonl"));
+            write_scans(&path("scans.jsonl"), &record.scans, &scenario.robot.mount())?;
+            files.push(path("summary.json"));
+            Summary::of(record, (&scenario.world.name, &scenario.robot.name))
+                .write(&path("summary.json"))?;
+            if let Some(sonar) = &record.sonar {
+                files.push(path("sonar.json"));
+                write_sonar(&path("sonar.json"), sonar)?;
+            }
+            Ok(files)
+        })();
+        let join = |h: std::thread::ScopedJoinHandle<'_, _>| {
+            h.join()
+                .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+        };
+        (
+            join(pictures),
+            join(recording_file),
+            join(grid),
+            join(reconstruction),
+            rest,
+        )
+    });
+    let mut files = rest?;
+    files.extend(pictures?);
+    files.extend(recording_file?);
+    files.extend(grid?);
+    files.extend(reconstruction?);
     Ok(Written {
         dir: dir.to_path_buf(),
         files,
