@@ -514,6 +514,7 @@ fn a_new_client_of_twin_serve_inherits_nothing() {
         base: Offer::Tcp("127.0.0.1:0".into()),
         pan_tilt: None,
         laser: None,
+        live: None,
     };
     let mut server = Server::new(twin, &options).unwrap();
     let address = server.addresses()[0]

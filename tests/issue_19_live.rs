@@ -112,9 +112,7 @@ fn a_client_subscribes_to_the_scans_and_decodes_every_one() {
     };
     let wall = started.elapsed().as_secs_f64();
     // The rest of the queue, then the server closes.
-    let server = Arc::try_unwrap(live.server)
-        .ok()
-        .expect("the run let go of the server");
+    let server = Arc::try_unwrap(live.server).expect("the run let go of the server");
     let closing = std::thread::spawn(move || server.stop());
     while let Ok(message) = ws.read() {
         if let Message::Binary(frame) = message
@@ -150,5 +148,82 @@ fn a_client_subscribes_to_the_scans_and_decodes_every_one() {
     assert!(
         wall >= last / speed,
         "{wall} s for a last scan at {last} s at {speed}x"
+    );
+}
+
+/// `twin serve --live`: the served twin publishes what its laser measures and where the robot
+/// truly is, whether or not a client reads the laser's serial face.
+#[test]
+fn the_served_twin_publishes_its_scans_and_its_truth() {
+    use sim::commands::serve::{Offer, ServeOptions, ServedLive, Server};
+    let scenario = scenario("lab-tour");
+    let server = Arc::new(LiveServer::start("127.0.0.1:0").unwrap());
+    let options = ServeOptions {
+        speed: 10.0,
+        base: Offer::Tcp("127.0.0.1:0".into()),
+        pan_tilt: None,
+        laser: None,
+        live: Some(ServedLive {
+            server: server.clone(),
+            mount: scenario.robot.mount(),
+            scan_period_s: 0.19,
+        }),
+    };
+    let twin = sim::Twin::new(&scenario.world, &scenario.robot, &scenario.noise, 5).unwrap();
+    let mut served = Server::new(twin, &options).unwrap();
+    let mut ws = connect(server.addr());
+    assert_eq!(json(ws.read().unwrap())["op"], "serverInfo");
+    let advertise = json(ws.read().unwrap());
+    let id = |topic: &str| {
+        advertise["channels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["topic"] == topic)
+            .unwrap_or_else(|| panic!("{topic}: {advertise}"))["id"]
+            .clone()
+    };
+    ws.send(Message::text(
+        serde_json::json!({"op": "subscribe", "subscriptions": [
+            {"id": 1, "channelId": id("/scan")},
+            {"id": 2, "channelId": id("/ground_truth")},
+        ]})
+        .to_string(),
+    ))
+    .unwrap();
+    while server.subscriptions() < 2 {
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    served.run(&stop, Some(Duration::from_secs(3)), |_, _| {});
+    drop(served);
+    drop(options);
+    Arc::try_unwrap(server).expect("one owner left").stop();
+    let (mut scans, mut truths) = (Vec::new(), Vec::new());
+    while let Ok(message) = ws.read() {
+        if let Message::Binary(frame) = message {
+            let reader = CdrReader::new(&frame[13..]).unwrap();
+            match u32::from_le_bytes(frame[1..5].try_into().unwrap()) {
+                1 => scans.push(reader.laser_scan().unwrap()),
+                2 => truths.push(reader.pose_stamped().unwrap()),
+                other => panic!("subscription {other}"),
+            }
+        }
+    }
+    // 3 s at one scan per 0.19 s (38,400 bps): 14 to 16 scans, each with its truth.
+    assert!((12..=17).contains(&scans.len()), "{} scans", scans.len());
+    assert_eq!(truths.len(), scans.len());
+    // The robot stands where the world starts it (nothing drives it).
+    let start = scenario.world.start;
+    for t in &truths {
+        let p = t.pose.to_planar();
+        assert!(p.distance(&start) < 0.01, "{p:?} against {start:?}");
+        assert_eq!(t.header.frame_id, "map");
+    }
+    assert!(scans.iter().all(|s| s.ranges.len() == 361));
+    assert!(
+        scans
+            .windows(2)
+            .all(|w| w[0].header.stamp < w[1].header.stamp)
     );
 }

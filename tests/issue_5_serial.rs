@@ -94,6 +94,7 @@ fn serve(scenario: &Scenario) -> ServedTwin {
         base: Offer::Tcp("127.0.0.1:0".into()),
         pan_tilt: None,
         laser: Some(Offer::Tcp("127.0.0.1:0".into())),
+        live: None,
     };
     let mut server = Server::new(twin, &options).unwrap();
     let addresses = server.addresses();

@@ -83,6 +83,7 @@ fn floods_garbage_and_many_reconnects_do_not_stop_the_server_or_grow_it() {
         base: Offer::Tcp("127.0.0.1:0".into()),
         pan_tilt: None,
         laser: Some(Offer::Tcp("127.0.0.1:0".into())),
+        live: None,
     };
     let server = Server::new(twin(), &options).unwrap();
     let addresses = server.addresses();
@@ -147,6 +148,7 @@ fn a_device_on_a_pseudo_terminal_opens_like_a_serial_port() {
         base: Offer::Pty,
         pan_tilt: None,
         laser: None,
+        live: None,
     };
     let server = Server::new(twin(), &options).unwrap();
     let (device, path) = server.addresses()[0].clone();

@@ -92,6 +92,7 @@ pub fn drive_served(
         base: Offer::Tcp("127.0.0.1:0".into()),
         pan_tilt: Some(Offer::Tcp("127.0.0.1:0".into())),
         laser: Some(Offer::Tcp("127.0.0.1:0".into())),
+        live: None,
     };
     let mut server = Server::new(twin, &options).unwrap();
     let at = |i: usize| server.addresses()[i].1.parse().unwrap();

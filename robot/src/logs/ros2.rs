@@ -765,6 +765,14 @@ impl<'a> CdrReader<'a> {
         })
     }
 
+    /// A `geometry_msgs/PoseStamped`.
+    pub fn pose_stamped(mut self) -> Result<PoseStampedMsg, CdrError> {
+        Ok(PoseStampedMsg {
+            header: self.header()?,
+            pose: self.transform("pose")?,
+        })
+    }
+
     /// A `std_msgs/String`.
     pub fn string_msg(mut self) -> Result<StringMsg, CdrError> {
         Ok(StringMsg(self.string("data")?))

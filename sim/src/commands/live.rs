@@ -210,6 +210,12 @@ impl LiveServer {
     }
 }
 
+impl std::fmt::Debug for LiveServer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "LiveServer({})", self.addr)
+    }
+}
+
 impl Drop for LiveServer {
     fn drop(&mut self) {
         self.shutdown();

@@ -589,7 +589,16 @@ impl LmsFace {
         self.tx_free = now;
     }
 
-    fn pump(&mut self, now: Stamp, twin: &mut Twin, log: &mut Vec<String>) {
+    /// Moves bytes both ways; with `keep`, every scan delivered by now is also handed back (for
+    /// the live view), whether the client asked for it or not.
+    fn pump(
+        &mut self,
+        now: Stamp,
+        twin: &mut Twin,
+        log: &mut Vec<String>,
+        keep: bool,
+    ) -> Vec<LaserScan> {
+        let mut kept = Vec::new();
         let mut notes = Vec::new();
         let was_connected = self.face.connected();
         if self.face.accept(&mut notes, &mut self.stats) {
@@ -627,6 +636,11 @@ impl LmsFace {
                 let (_, scan) = twin.pop_scan().expect("a scan is on its way");
                 let bytes = self.lms.scan_telegram(&scan);
                 self.queue(delivery, bytes);
+                if keep {
+                    kept.push(scan);
+                }
+            } else if keep {
+                kept.extend(twin.pop_scan().map(|(_, scan)| scan));
             } else {
                 twin.drop_next_scan();
             }
@@ -654,6 +668,7 @@ impl LmsFace {
             }
         }
         log.extend(notes.into_iter().map(|n| format!("laser: {n}")));
+        kept
     }
 }
 
@@ -668,6 +683,19 @@ pub struct ServeOptions {
     pub pan_tilt: Option<Offer>,
     /// The laser's face, if offered.
     pub laser: Option<Offer>,
+    /// Publishes the scans and the truth live (`twin serve --live`).
+    pub live: Option<ServedLive>,
+}
+
+/// What `twin serve --live` publishes with.
+#[derive(Clone, Debug)]
+pub struct ServedLive {
+    /// The server.
+    pub server: std::sync::Arc<super::live::LiveServer>,
+    /// Where the laser sits on the base (the robot description's).
+    pub mount: robot::mount::LaserMount,
+    /// Mean time between scans, seconds.
+    pub scan_period_s: f64,
 }
 
 /// The twin with its devices offered; see the [module](self) documentation.
@@ -678,6 +706,7 @@ pub struct Server {
     pan_tilt: Option<LineFace>,
     laser: Option<LmsFace>,
     log: Vec<String>,
+    live: Option<ServedLive>,
 }
 
 impl Server {
@@ -729,6 +758,12 @@ impl Server {
             pan_tilt,
             laser,
             log: Vec::new(),
+            live: options.live.clone(),
+        })
+        .inspect(|server| {
+            if let Some(live) = &server.live {
+                announce(live, &server.twin);
+            }
         })
     }
 
@@ -768,8 +803,22 @@ impl Server {
         {
             face.pump(now, board, &mut self.log);
         }
-        if let Some(face) = &mut self.laser {
-            face.pump(now, &mut self.twin, &mut self.log);
+        let keep = self.live.is_some();
+        let scans = match &mut self.laser {
+            Some(face) => face.pump(now, &mut self.twin, &mut self.log, keep),
+            None if keep => {
+                let mut scans = Vec::new();
+                while self.twin.next_scan_delivery().is_some_and(|d| d <= now) {
+                    scans.extend(self.twin.pop_scan().map(|(_, scan)| scan));
+                }
+                scans
+            }
+            None => Vec::new(),
+        };
+        if let Some(live) = &self.live {
+            for scan in &scans {
+                publish(live, &self.twin, scan);
+            }
         }
     }
 
@@ -867,6 +916,67 @@ mod tests {
     }
 }
 
+/// The served twin's topics: no odometry (the host computes it from the firmware's counts), so
+/// the truth places the base (`map` → `base_link`), beside `/scan`, `/ground_truth`, `/clock` and
+/// the head's joints.
+fn announce(live: &ServedLive, twin: &Twin) {
+    use robot::logs::ros2::Encoded;
+    let statics = crate::output::static_transforms(&live.mount, &[]);
+    live.server
+        .publish("/tf_static", Stamp::ZERO, &Encoded::of(&statics));
+    let empty = LaserScan {
+        stamp: Stamp::ZERO,
+        angle_min: 0.0,
+        angle_increment: 0.0,
+        range_max_mm: 0,
+        ranges_mm: Vec::new(),
+        head: None,
+    };
+    let _ = twin;
+    for (topic, msg) in served_topics(live, &empty, robot::Pose2::IDENTITY) {
+        live.server.advertise(topic, &msg);
+    }
+}
+
+fn served_topics(
+    live: &ServedLive,
+    scan: &LaserScan,
+    truth: robot::Pose2,
+) -> Vec<(&'static str, robot::logs::ros2::Encoded)> {
+    use robot::logs::ros2::{ClockMsg, Encoded, Header, PoseStampedMsg, TfMessage, Transform};
+    let t = scan.stamp;
+    let mut tf = vec![robot::logs::ros2::TransformStamped {
+        header: Header::new(t, "map"),
+        child_frame_id: "base_link".into(),
+        transform: Transform::planar(truth),
+    }];
+    if let Some(head) = scan.head {
+        tf.extend(crate::output::head_transforms(&live.mount, t, head));
+    }
+    let period = live.scan_period_s;
+    vec![
+        ("/clock", Encoded::of(&ClockMsg(t))),
+        ("/tf", Encoded::of(&TfMessage(tf))),
+        (
+            "/ground_truth",
+            Encoded::of(&PoseStampedMsg {
+                header: Header::new(t, "map"),
+                pose: Transform::planar(truth),
+            }),
+        ),
+        ("/scan", Encoded::of(&crate::output::scan_msg(scan, period))),
+    ]
+}
+
+fn publish(live: &ServedLive, twin: &Twin, scan: &LaserScan) {
+    let truth = twin
+        .true_pose_at(scan.stamp)
+        .unwrap_or_else(|| twin.true_pose());
+    for (topic, msg) in served_topics(live, scan, truth) {
+        live.server.publish(topic, scan.stamp, &msg);
+    }
+}
+
 /// `twin serve`: run the twin in (scaled) real time and offer its devices byte for byte, as the
 /// robot's serial ports would: the base and pan-tilt firmware and the SICK LMS's telegrams, on
 /// TCP ports or pseudo-terminals. Runs until killed (or for --duration).
@@ -892,6 +1002,10 @@ pub struct ServeArgs {
     /// Seed replacing the scenario's.
     #[arg(long)]
     pub seed: Option<u64>,
+    /// Also publish the scans and the true pose over the Foxglove WebSocket protocol on this
+    /// address (e.g. 127.0.0.1:8765).
+    #[arg(long, value_name = "ADDR")]
+    pub live: Option<String>,
     /// Print only the addresses and errors.
     #[arg(long, short)]
     pub quiet: bool,
@@ -926,29 +1040,25 @@ pub fn main(args: ServeArgs) -> Result<(), super::CommandError> {
         &scenario.noise,
         args.seed.unwrap_or(scenario.seed),
     )?;
+    let live = match &args.live {
+        Some(addr) => Some(ServedLive {
+            server: std::sync::Arc::new(super::live::LiveServer::start(addr)?),
+            mount: scenario.robot.mount(),
+            scan_period_s: crate::output::scan_period_s(&scenario.robot.laser),
+        }),
+        None => None,
+    };
     let options = ServeOptions {
         speed: args.speed,
         base: args.base,
         pan_tilt: args.pan_tilt,
         laser: args.laser,
+        live,
     };
     let mut server = Server::new(twin, &options)?;
-    say!(
-        "serving {} ({}) at {}x real time",
-        scenario.name,
-        scenario.robot.name,
-        options.speed
-    );
-    for (device, address) in server.addresses() {
-        say!("{device:<9} {address}");
-    }
-    std::io::stdout()
-        .flush()
-        .map_err(|source| CommandError::Io {
-            what: "writing stdout",
-            source,
-        })?;
-    // SIGINT and SIGTERM end the run like --duration does: the statistics are printed.
+    // SIGINT and SIGTERM end the run like --duration does: the statistics are printed. The
+    // handlers are in place before the addresses are printed, so a client that reads them and
+    // stops the server at once finds it ready to stop cleanly.
     let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
         signal_hook::flag::register(signal, std::sync::Arc::clone(&stop)).map_err(|source| {
@@ -958,6 +1068,24 @@ pub fn main(args: ServeArgs) -> Result<(), super::CommandError> {
             }
         })?;
     }
+    say!(
+        "serving {} ({}) at {}x real time",
+        scenario.name,
+        scenario.robot.name,
+        options.speed
+    );
+    for (device, address) in server.addresses() {
+        say!("{device:<9} {address}");
+    }
+    if let Some(live) = &options.live {
+        say!("live      ws://{} (Foxglove WebSocket)", live.server.addr());
+    }
+    std::io::stdout()
+        .flush()
+        .map_err(|source| CommandError::Io {
+            what: "writing stdout",
+            source,
+        })?;
     let quiet = args.quiet;
     server.run(&stop, duration, |t, line| {
         if !quiet {

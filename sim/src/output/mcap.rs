@@ -76,7 +76,11 @@ fn stamped(stamp: Stamp, parent: &str, child: &str, transform: Transform) -> Tra
 }
 
 /// The head's joints as two transforms: the pan about z at the pan axis, the tilt about y.
-fn head_transforms(mount: &LaserMount, stamp: Stamp, head: HeadAngles) -> Vec<TransformStamped> {
+pub fn head_transforms(
+    mount: &LaserMount,
+    stamp: Stamp,
+    head: HeadAngles,
+) -> Vec<TransformStamped> {
     let LaserMount::Head(g) = mount else {
         return Vec::new();
     };
@@ -278,7 +282,7 @@ fn write(path: &Path, r: &Recording) -> Result<u32, robot::logs::mcap::RecordErr
 }
 
 /// A scan as `sensor_msgs/LaserScan`: metres, no return as +inf.
-fn scan_msg(s: &LaserScan, scan_time_s: f64) -> LaserScanMsg {
+pub fn scan_msg(s: &LaserScan, scan_time_s: f64) -> LaserScanMsg {
     let n = s.ranges_mm.len();
     LaserScanMsg {
         header: Header::new(s.stamp, "laser"),

@@ -23,7 +23,10 @@ mod world_json;
 pub use world_json::write_world_json;
 
 pub use grid::write_grid;
-pub use mcap::{RecordedScan, Recording, estimate_msg, scan_topics, static_transforms, write_mcap};
+pub use mcap::{
+    RecordedScan, Recording, estimate_msg, head_transforms, scan_msg, scan_topics,
+    static_transforms, write_mcap,
+};
 pub use ply::write_ply;
 pub use reconstruction::{
     ReconstructionFile, THESIS_QUADS, THESIS_TRIANGLES, reconstruction_file, reconstruction_report,
