@@ -11,20 +11,9 @@ use crate::common::repo;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// Runs `twin ARGS --out DIR` from the repository into a fresh folder named after `name`.
+/// `twin ARGS --out DIR` into a fresh folder named after `name`.
 fn twin_into(name: &str, args: &[&str]) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("twin-issue-19-rec-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    let out = Command::new(env!("CARGO_BIN_EXE_twin"))
-        .args(args)
-        .arg("--out")
-        .arg(&dir)
-        .current_dir(repo())
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "twin {args:?}: {stderr}");
-    dir
+    crate::common::twin_into(&format!("issue-19-rec-{name}"), args)
 }
 
 /// The Python reader's report on a run folder.

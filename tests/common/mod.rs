@@ -108,3 +108,20 @@ pub fn drive_served(
     handle.join().unwrap();
     (drive, events)
 }
+
+/// Runs `twin ARGS --out DIR` from the repository into a fresh folder named after `name`;
+/// panics with the program's error output when it fails.
+pub fn twin_into(name: &str, args: &[&str]) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("twin-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_twin"))
+        .args(args)
+        .arg("--out")
+        .arg(&dir)
+        .current_dir(repo())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "twin {args:?}: {stderr}");
+    dir
+}

@@ -129,18 +129,37 @@ impl<W: Write + Seek> Recorder<W> {
     }
 }
 
+/// A file's problem, named with the file.
+fn malformed(file: &str, message: String) -> LogError {
+    LogError::Malformed {
+        file: file.to_string(),
+        line: 0,
+        message,
+    }
+}
+
+/// The messages of an MCAP file in file order, numbered from 0; one that cannot be read is an
+/// error naming the file and the message.
+fn messages<'a>(
+    bytes: &'a [u8],
+    file: &'a str,
+) -> Result<impl Iterator<Item = (usize, Result<mcap::Message<'a>, LogError>)> + 'a, LogError> {
+    let stream = mcap::MessageStream::new(bytes)
+        .map_err(|e| malformed(file, format!("not an MCAP file ({e})")))?;
+    Ok(stream.enumerate().map(move |(n, message)| {
+        (
+            n,
+            message.map_err(|e| malformed(file, format!("message {}: {e}", n + 1))),
+        )
+    }))
+}
+
 /// The base frames a bag's odometry may name.
 const BASE_FRAMES: [&str; 2] = ["base_link", "base_footprint"];
 
 /// Reads an MCAP file of ROS 2 messages (see the module's documentation).
 pub fn read_mcap(bytes: &[u8], file: &str) -> Result<RecordedLog, LogError> {
-    let malformed = |what: String| LogError::Malformed {
-        file: file.to_string(),
-        line: 0,
-        message: what,
-    };
-    let stream = mcap::MessageStream::new(bytes)
-        .map_err(|e| malformed(format!("not an MCAP file ({e})")))?;
+    let malformed = |what: String| malformed(file, what);
     let mut log = RecordedLog::new(LogFormat::Mcap);
     let mut scan_topic: Option<String> = None;
     let mut odometry: Vec<(Stamp, Pose2)> = Vec::new();
@@ -148,8 +167,8 @@ pub fn read_mcap(bytes: &[u8], file: &str) -> Result<RecordedLog, LogError> {
     let mut statics: BTreeMap<String, TransformStamped> = BTreeMap::new();
     let mut scans: Vec<RangeScan> = Vec::new();
     let mut scan_frame = String::new();
-    for (n, message) in stream.enumerate() {
-        let message = message.map_err(|e| malformed(format!("message {}: {e}", n + 1)))?;
+    for (n, message) in messages(bytes, file)? {
+        let message = message?;
         let channel = &message.channel;
         let schema = channel.schema.as_ref().map(|s| s.name.as_str());
         if channel.message_encoding != "cdr" {
@@ -263,16 +282,10 @@ pub const TAPE_TOPIC: &str = "/hardware/tape";
 
 /// The contract exchanges recorded in an MCAP file ([`TAPE_TOPIC`]), in order.
 pub fn read_tape(bytes: &[u8], file: &str) -> Result<Vec<crate::replay::Exchange>, LogError> {
-    let malformed = |what: String| LogError::Malformed {
-        file: file.to_string(),
-        line: 0,
-        message: what,
-    };
-    let stream = mcap::MessageStream::new(bytes)
-        .map_err(|e| malformed(format!("not an MCAP file ({e})")))?;
+    let malformed = |what: String| malformed(file, what);
     let mut tape = Vec::new();
-    for (n, message) in stream.enumerate() {
-        let message = message.map_err(|e| malformed(format!("message {}: {e}", n + 1)))?;
+    for (n, message) in messages(bytes, file)? {
+        let message = message?;
         if message.channel.topic != TAPE_TOPIC {
             continue;
         }

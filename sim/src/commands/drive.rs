@@ -128,37 +128,74 @@ where
         let (placed, map) = localiser.finish();
         (kind, placed, map)
     });
-    let mount = scenario.robot.mount();
-    let inputs: Vec<SceneInput> = scans
-        .iter()
-        .filter_map(
-            |(scan, odometry, scene): &(LaserScan, Pose2, Option<SceneTag>)| {
-                SceneInput::of(scan, *odometry, *scene, &mount, None)
-            },
-        )
-        .collect();
-    let reconstruction = reconstruct(
-        &inputs,
-        localisation
-            .as_ref()
-            .map(|(_, placed, _)| placed.as_slice()),
-        &scenario.reconstruction.mesh,
-        None,
-        false,
-    )
-    .map_err(DriveError::Reconstruction)?;
-    Ok(DriveRecord {
-        scenario: scenario.name.clone(),
-        steps: report.steps,
-        end: scans.last().map_or(report.end, |(s, _, _)| s.stamp),
+    DriveRecord::assemble(
+        scenario,
         scans,
-        final_odometry: report.final_odometry,
+        &report,
         pan_tilt,
         localisation,
-        wall_seconds: started.elapsed().as_secs_f64(),
-        reconstruction,
-        tape: Vec::new(),
-    })
+        started,
+        Vec::new(),
+    )
+    .map_err(DriveError::Reconstruction)
+}
+
+impl DriveRecord {
+    /// A drive's record from what its controller did: the scenes' 3D models built from the
+    /// scans (placed by the estimate and by odometry; no truth to score them against).
+    pub fn assemble(
+        scenario: &Scenario,
+        scans: Vec<(LaserScan, Pose2, Option<SceneTag>)>,
+        report: &robot::control::TourReport,
+        pan_tilt: Option<PanTiltStatus>,
+        localisation: Option<(MatcherKind, Vec<Placed>, Vec<[f64; 2]>)>,
+        started: Instant,
+        tape: Vec<robot::replay::Exchange>,
+    ) -> Result<Self, robot::reconstruction::SceneError> {
+        let mount = scenario.robot.mount();
+        let inputs: Vec<SceneInput> = scans
+            .iter()
+            .filter_map(|(scan, odometry, scene)| {
+                SceneInput::of(scan, *odometry, *scene, &mount, None)
+            })
+            .collect();
+        let reconstruction = reconstruct(
+            &inputs,
+            localisation
+                .as_ref()
+                .map(|(_, placed, _)| placed.as_slice()),
+            &scenario.reconstruction.mesh,
+            None,
+            false,
+        )?;
+        Ok(DriveRecord {
+            scenario: scenario.name.clone(),
+            steps: report.steps,
+            end: scans.last().map_or(report.end, |(s, _, _)| s.stamp),
+            scans,
+            final_odometry: report.final_odometry,
+            pan_tilt,
+            localisation,
+            wall_seconds: started.elapsed().as_secs_f64(),
+            reconstruction,
+            tape,
+        })
+    }
+
+    /// Prints the last estimate, when the drive localised.
+    pub fn say_estimate(&self) {
+        if let Some((kind, placed, _)) = &self.localisation
+            && let Some(last) = placed.last()
+        {
+            let e = last.estimate;
+            say!(
+                "estimate ({kind}): ({:.3} m, {:.3} m, {:.2} deg)",
+                e.x,
+                e.y,
+                e.theta.to_degrees()
+            );
+        }
+    }
 }
 
 /// The figures of a drive, as `summary.json` holds them.
@@ -458,17 +495,7 @@ pub fn main(args: DriveArgs) -> Result<(), super::CommandError> {
             p.theta.to_degrees(),
             events.len()
         );
-        if let Some((kind, placed, _)) = &record.localisation
-            && let Some(last) = placed.last()
-        {
-            let e = last.estimate;
-            say!(
-                "estimate ({kind}): ({:.3} m, {:.3} m, {:.2} deg)",
-                e.x,
-                e.y,
-                e.theta.to_degrees()
-            );
-        }
+        record.say_estimate();
         if let Some(recon) = &record.reconstruction {
             say!(
                 "{}",

@@ -182,6 +182,14 @@ pub enum CommandError {
 }
 
 impl CommandError {
+    /// Writing the outputs into `dir` failed.
+    pub(crate) fn write(dir: &std::path::Path) -> impl FnOnce(std::io::Error) -> CommandError + '_ {
+        move |source| CommandError::Write {
+            dir: dir.to_path_buf(),
+            source,
+        }
+    }
+
     /// An option out of range.
     pub(crate) fn option(
         option: &'static str,

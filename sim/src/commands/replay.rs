@@ -8,7 +8,6 @@
 //! since the recording is stopped at its first call the tape does not hold.
 
 use super::drive::DriveRecord;
-use super::reconstruct::{SceneInput, reconstruct};
 use super::run::{Controlled, RunOptions, control};
 use crate::config::Scenario;
 use robot::control::TourError;
@@ -79,31 +78,14 @@ pub fn replay_scenario(
         });
     }
     let localisation = localisation.map(|l| (l.matcher, l.placed, l.map));
-    let mount = scenario.robot.mount();
-    let inputs: Vec<SceneInput> = kept
-        .iter()
-        .filter_map(|(scan, odometry, scene)| SceneInput::of(scan, *odometry, *scene, &mount, None))
-        .collect();
-    let reconstruction = reconstruct(
-        &inputs,
-        localisation
-            .as_ref()
-            .map(|(_, placed, _)| placed.as_slice()),
-        &scenario.reconstruction.mesh,
-        None,
-        false,
-    )?;
-    Ok(DriveRecord {
-        scenario: scenario.name.clone(),
-        steps: report.steps,
-        end: kept.last().map_or(report.end, |(s, _, _)| s.stamp),
-        scans: kept,
-        final_odometry: report.final_odometry,
+    // Recorded again with the outputs: a replay replays too.
+    Ok(DriveRecord::assemble(
+        scenario,
+        kept,
+        &report,
         pan_tilt,
         localisation,
-        wall_seconds: started.elapsed().as_secs_f64(),
-        reconstruction,
-        // Recorded again with the outputs: a replay replays too.
-        tape: robot.into_tape(),
-    })
+        started,
+        robot.into_tape(),
+    )?)
 }

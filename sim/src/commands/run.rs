@@ -113,14 +113,7 @@ impl Live {
         let statics = Encoded::of(&static_transforms(&scenario.robot.mount(), &[]));
         self.server.publish("/tf_static", Stamp::ZERO, &statics);
         let estimate = Encoded::of(&estimate_msg(Stamp::ZERO, robot::Pose2::IDENTITY));
-        let empty = robot::hardware::LaserScan {
-            stamp: Stamp::ZERO,
-            angle_min: 0.0,
-            angle_increment: 0.0,
-            range_max_mm: 0,
-            ranges_mm: Vec::new(),
-            head: None,
-        };
+        let empty = crate::output::no_scan();
         let example = crate::output::RecordedScan {
             scan: &empty,
             odometry: robot::Pose2::IDENTITY,
@@ -467,12 +460,8 @@ fn replay_main(
     let dir = args.out.clone().unwrap_or_else(|| {
         std::path::PathBuf::from("out").join(format!("{}-replay", scenario.name))
     });
-    let files = super::drive::write_drive(&record, scenario, &[], &dir).map_err(|source| {
-        CommandError::Write {
-            dir: dir.clone(),
-            source,
-        }
-    })?;
+    let files = super::drive::write_drive(&record, scenario, &[], &dir)
+        .map_err(CommandError::write(&dir))?;
     if !args.quiet {
         say!(
             "{}: replayed {exchanges} exchanges of {name}: {} steps, {} scans",
@@ -480,17 +469,7 @@ fn replay_main(
             record.steps,
             record.scans.len()
         );
-        if let Some((kind, placed, _)) = &record.localisation
-            && let Some(last) = placed.last()
-        {
-            let e = last.estimate;
-            say!(
-                "estimate ({kind}): ({:.3} m, {:.3} m, {:.2} deg)",
-                e.x,
-                e.y,
-                e.theta.to_degrees()
-            );
-        }
+        record.say_estimate();
         say!("wrote {}", dir.display());
         for f in &files {
             say!("  {}", f.display());
@@ -547,12 +526,8 @@ pub fn main(args: RunArgs) -> Result<(), super::CommandError> {
     let dir = args
         .out
         .unwrap_or_else(|| std::path::PathBuf::from("out").join(&scenario.name));
-    let written = crate::output::write_all(&record, &scenario, &dir).map_err(|source| {
-        CommandError::Write {
-            dir: dir.clone(),
-            source,
-        }
-    })?;
+    let written =
+        crate::output::write_all(&record, &scenario, &dir).map_err(CommandError::write(&dir))?;
     if !args.quiet {
         say!(
             "{}: {:.1} s simulated in {:.3} s ({:.0}x real time), {} scans, {:.2} m driven",

@@ -924,14 +924,7 @@ fn announce(live: &ServedLive, twin: &Twin) {
     let statics = crate::output::static_transforms(&live.mount, &[]);
     live.server
         .publish("/tf_static", Stamp::ZERO, &Encoded::of(&statics));
-    let empty = LaserScan {
-        stamp: Stamp::ZERO,
-        angle_min: 0.0,
-        angle_increment: 0.0,
-        range_max_mm: 0,
-        ranges_mm: Vec::new(),
-        head: None,
-    };
+    let empty = crate::output::no_scan();
     let _ = twin;
     for (topic, msg) in served_topics(live, &empty, robot::Pose2::IDENTITY) {
         live.server.advertise(topic, &msg);

@@ -281,6 +281,18 @@ fn write(path: &Path, r: &Recording) -> Result<u32, robot::logs::mcap::RecordErr
     Ok(n)
 }
 
+/// A scan of no beams: the example a live view announces `/scan` with before the first one.
+pub fn no_scan() -> LaserScan {
+    LaserScan {
+        stamp: Stamp::ZERO,
+        angle_min: 0.0,
+        angle_increment: 0.0,
+        range_max_mm: 0,
+        ranges_mm: Vec::new(),
+        head: None,
+    }
+}
+
 /// A scan as `sensor_msgs/LaserScan`: metres, no return as +inf.
 pub fn scan_msg(s: &LaserScan, scan_time_s: f64) -> LaserScanMsg {
     let n = s.ranges_mm.len();

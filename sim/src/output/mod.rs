@@ -24,7 +24,7 @@ pub use world_json::write_world_json;
 
 pub use grid::write_grid;
 pub use mcap::{
-    RecordedScan, Recording, estimate_msg, head_transforms, scan_msg, scan_topics,
+    RecordedScan, Recording, estimate_msg, head_transforms, no_scan, scan_msg, scan_topics,
     static_transforms, write_mcap,
 };
 pub use ply::write_ply;
