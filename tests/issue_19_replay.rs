@@ -101,3 +101,31 @@ fn a_controller_that_decides_differently_is_stopped_and_named() {
     );
     assert!(stderr.contains("README.md"), "{stderr}");
 }
+
+/// The real robot's path: a drive through `SerialRobot` (against `twin serve`, as `twin drive`
+/// tapes it) with the sonar ring firing and the pan-tilt homed, replayed through `ReplayRobot`:
+/// the same calls, the same estimate.
+#[test]
+fn a_served_drive_replays_with_its_sonar_and_head() {
+    // The tilted-scan tour (thesis robot, head positioned first) with the ring firing too.
+    let mut scenario = crate::common::scenario("tilted-scan");
+    scenario.sonar = crate::common::scenario("lab-tour-thesis").sonar;
+    assert!(scenario.sonar.is_some());
+    let (drive, events) = crate::common::drive_served(&scenario, 20.0);
+    let drive = drive.unwrap_or_else(|e| panic!("{e}; events: {events:#?}"));
+    assert!(
+        drive
+            .tape
+            .iter()
+            .any(|x| matches!(x.call, robot::replay::Call::Sonar { .. })),
+        "the drive fired the ring"
+    );
+    let replayed = sim::commands::replay::replay_scenario(&scenario, drive.tape.clone(), |_, _| {})
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(replayed.scans, drive.scans);
+    assert_eq!(replayed.final_odometry, drive.final_odometry);
+    assert_eq!(
+        replayed.localisation.as_ref().map(|l| &l.1),
+        drive.localisation.as_ref().map(|l| &l.1)
+    );
+}

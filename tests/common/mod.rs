@@ -101,9 +101,16 @@ pub fn drive_served(
     let flag = Arc::clone(&stop);
     let handle = std::thread::spawn(move || server.run(&flag, None, |_, _| {}));
     let clock: Arc<dyn robot::Clock> = Arc::new(WallClock::new(speed));
-    let mut robot = robot::serial::SerialRobot::open(config, clock).unwrap();
+    // Taped, as `twin drive` tapes the real robot: the record carries its tape.
+    let mut robot =
+        robot::replay::Taped::new(robot::serial::SerialRobot::open(config, clock).unwrap());
     let drive = sim::commands::drive::drive_scenario(&mut robot, scenario, None, |_, _| {});
-    let events = robot.take_events();
+    let (mut serial, tape) = robot.into_parts();
+    let drive = drive.map(|mut d| {
+        d.tape = tape;
+        d
+    });
+    let events = serial.take_events();
     stop.store(true, Ordering::Relaxed);
     handle.join().unwrap();
     (drive, events)

@@ -5,12 +5,15 @@
 
 use super::reconstruct::{SceneInput, reconstruct};
 use crate::config::Scenario;
+use crate::config::scenario::LocalisationSettings;
 use crate::output::logmap::{Panel, occupied_cells, write_log_map_svg};
 use crate::output::{ScanLine, write_scan_lines, write_tum};
-use robot::control::{SceneTag, TourError, TourEvent, run_tour};
-use robot::hardware::{DriveBase, HardwareError, Laser, LaserScan, PanTilt, PanTiltStatus};
+use robot::control::{SceneTag, TourError};
+use robot::hardware::{
+    DriveBase, HardwareError, Laser, LaserScan, PanTilt, PanTiltStatus, SonarRing,
+};
 use robot::localization::{
-    LEVEL_TOLERANCE_RAD, LevelLocaliser, MapConfig, MatchStats, MatcherKind, Placed, RangeScan,
+    LEVEL_TOLERANCE_RAD, LevelLocaliser, MatchStats, MatcherKind, Placed, RangeScan,
 };
 use robot::{Pose2, Stamp};
 use serde::Serialize;
@@ -47,92 +50,54 @@ pub struct DriveRecord {
 /// Why a drive stopped.
 #[derive(Debug, thiserror::Error)]
 pub enum DriveError<E: HardwareError> {
-    /// The tour failed.
+    /// The controller failed: the head's positioning (step 0 `(pan-tilt)`), the sonar's
+    /// start, or a step of the tour.
     #[error(transparent)]
     Tour(#[from] TourError<E>),
-    /// The pan-tilt could not reach the scenario's position.
-    #[error("pan-tilt: {0}")]
-    PanTilt(E),
-    /// The head was still moving after the polls allowed.
-    #[error("pan-tilt: the head was still moving after {0} polls")]
-    HeadStuck(u32),
     /// The scenes' scans cannot be made into a 3D model.
     #[error("3D reconstruction: {0}")]
     Reconstruction(robot::reconstruction::SceneError),
 }
 
-/// Ticks between two status polls while the head moves, and how many polls a move may take.
-const HEAD_POLL_MS: u16 = 50;
-const HEAD_POLL_LIMIT: u32 = 1200;
-
-/// Drives `scenario`'s script on `robot` (positioning the pan-tilt first if the scenario says
-/// where), localising with `matcher` (default: the scenario's). `progress(done, total)` is called
-/// before each step.
+/// Drives `scenario`'s script on `robot` with the same controller as `twin run`
+/// ([`super::run::control`]: the pan-tilt to the scenario's position, the sonar ring fired when
+/// the scenario has `[sonar]`, the tour, the localiser), localising with `matcher` (default: the
+/// scenario's). `progress(done, total)` is called before each step.
 pub fn drive_scenario<R>(
     robot: &mut R,
     scenario: &Scenario,
     matcher: Option<MatcherKind>,
-    mut progress: impl FnMut(usize, usize),
+    progress: impl FnMut(usize, usize),
 ) -> Result<DriveRecord, DriveError<R::Error>>
 where
-    R: DriveBase + Laser + PanTilt,
+    R: DriveBase + Laser + PanTilt + SonarRing,
 {
     let started = Instant::now();
-    let pan_tilt = match scenario.pan_tilt {
-        Some(target) => {
-            let status = robot
-                .move_pan_tilt_to(target, HEAD_POLL_MS, HEAD_POLL_LIMIT)
-                .map_err(DriveError::PanTilt)?;
-            if !status.idle() {
-                return Err(DriveError::HeadStuck(HEAD_POLL_LIMIT));
-            }
-            Some(status)
-        }
-        None => None,
-    };
-    let matcher = matcher.or(scenario.localisation.map(|l| l.matcher));
-    let mut localiser = matcher.map(|kind| {
-        let settings = scenario.localisation;
-        let config = MapConfig {
-            keyframe_distance_m: settings.map_or(0.0, |s| s.keyframe_distance_m),
-            keyframe_angle_rad: settings.map_or(0.0, |s| s.keyframe_angle_rad),
-            require_converged: settings.is_none_or(|s| !s.use_untrusted),
-            ..MapConfig::default()
-        };
-        LevelLocaliser::new(kind, scenario.robot.mount(), config)
-    });
-    let mut scans = Vec::new();
-    let report = run_tour(
+    let mut scenario = scenario.clone();
+    if let Some(matcher) = matcher {
+        let settings = scenario.localisation.get_or_insert(LocalisationSettings {
+            matcher,
+            keyframe_distance_m: 0.0,
+            keyframe_angle_rad: 0.0,
+            use_untrusted: false,
+        });
+        settings.matcher = matcher;
+    }
+    let controlled = super::run::control(
         robot,
-        scenario.robot.geometry(),
-        scenario.world.start,
-        &scenario.steps,
-        &scenario.tour,
-        |event: TourEvent<'_>| match event {
-            TourEvent::StepStarted { index, total, .. } => progress(index, total),
-            TourEvent::Scan {
-                scan,
-                odometry,
-                scene,
-            } => {
-                if let Some(localiser) = &mut localiser {
-                    localiser.push(scan, odometry, scene);
-                }
-                scans.push((scan.clone(), odometry, scene));
-            }
-        },
+        &scenario,
+        &super::run::RunOptions::default(),
+        |_| Ok(()),
+        progress,
     )?;
-    progress(report.steps, report.steps);
-    let localisation = localiser.map(|localiser| {
-        let kind = localiser.kind();
-        let (placed, map) = localiser.finish();
-        (kind, placed, map)
-    });
+    let localisation = controlled
+        .localisation
+        .map(|l| (l.matcher, l.placed, l.map));
     DriveRecord::assemble(
-        scenario,
-        scans,
-        &report,
-        pan_tilt,
+        &scenario,
+        controlled.kept,
+        &controlled.report,
+        controlled.pan_tilt,
         localisation,
         started,
         Vec::new(),
