@@ -10,10 +10,11 @@
 #SBATCH --output=out/table-5-1/merge-%j.log
 set -euo pipefail
 SHARDS=${TABLE_5_1_SHARDS:-16}
+OUT=${TABLE_5_1_OUT:-out/table-5-1}
 missing=()
 for ((k = 0; k < SHARDS; k++)); do
   # A shard is done when its trials.csv is written (the last file a run writes).
-  [ -s "out/table-5-1/shard-$k/trials.csv" ] || missing+=("$k")
+  [ -s "$OUT/shard-$k/trials.csv" ] || missing+=("$k")
 done
 if [ "${#missing[@]}" -gt 0 ]; then
   list=$(IFS=,; echo "${missing[*]}")
@@ -23,5 +24,5 @@ if [ "${#missing[@]}" -gt 0 ]; then
   exit 1
 fi
 shards=()
-for ((k = 0; k < SHARDS; k++)); do shards+=("out/table-5-1/shard-$k"); done
-exec target/release/twin montecarlo merge "${shards[@]}" --out out/table-5-1/merged
+for ((k = 0; k < SHARDS; k++)); do shards+=("$OUT/shard-$k"); done
+exec target/release/twin montecarlo merge "${shards[@]}" --out "$OUT/merged"

@@ -22,13 +22,15 @@
 #SBATCH --output=out/table-5-1/slurm-%A_%a.log
 set -euo pipefail
 SHARDS=${TABLE_5_1_SHARDS:-16}
+STUDY=${TABLE_5_1_STUDY:-studies/table-5-1.toml}
+OUT=${TABLE_5_1_OUT:-out/table-5-1}
 TASK=${SLURM_ARRAY_TASK_ID:?run as a task of a job array (sbatch --array=0-$((SHARDS - 1)))}
 if ! [ "$TASK" -ge 0 ] 2>/dev/null || [ "$TASK" -ge "$SHARDS" ]; then
   echo "task $TASK is not a shard of $SHARDS: expected 0 to $((SHARDS - 1))" >&2
   exit 2
 fi
-exec target/release/twin montecarlo studies/table-5-1.toml \
+exec target/release/twin montecarlo "$STUDY" \
   --shard "${TASK}/${SHARDS}" \
   --threads "${SLURM_CPUS_PER_TASK:-2}" \
-  --out "out/table-5-1/shard-${TASK}" \
+  --out "$OUT/shard-${TASK}" \
   --quiet
