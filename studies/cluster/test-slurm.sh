@@ -13,10 +13,17 @@ for tool in munged slurmctld slurmd sbatch squeue scontrol scancel sinfo; do
 done
 [ -x target/release/twin ] || { echo "test-slurm: build twin first (cargo build --release)" >&2; exit 1; }
 ROOT=$(mktemp -d /tmp/twin-slurm.XXXXXX)
+PASSED=0
+# Stops every daemon by its PID (and waits for it), then removes the folder if the test passed.
 cleanup() {
   for pid in "$ROOT"/slurmd.pid "$ROOT"/slurmctld.pid "$ROOT"/munged.pid; do
-    [ -s "$pid" ] && kill "$(cat "$pid")" 2>/dev/null || true
+    if [ -s "$pid" ]; then
+      p=$(cat "$pid")
+      kill "$p" 2>/dev/null || true
+      for _ in $(seq 50); do kill -0 "$p" 2>/dev/null || break; sleep 0.1; done
+    fi
   done
+  if [ "$PASSED" = 1 ]; then rm -rf "$ROOT"; else echo "test-slurm: logs kept in $ROOT" >&2; fi
 }
 trap cleanup EXIT
 say() { echo "test-slurm: $*"; }
@@ -101,4 +108,4 @@ for file in trials.csv summary.json table.md errors.svg; do
 done
 grep -qi "requeue" "$ROOT/slurmd.log" || fail "task 1 was never requeued (slurmd.log)"
 say "merged files equal a single run's byte for byte (requeued task resumed, cancelled one recovered)"
-rm -rf "$ROOT"
+PASSED=1
