@@ -673,7 +673,7 @@ impl<'a> CdrReader<'a> {
             return Err(CdrError::Truncated {
                 field,
                 at: self.at,
-                need: n * size - left,
+                need: n.saturating_mul(size) - left,
             });
         }
         Ok(n)

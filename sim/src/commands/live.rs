@@ -151,8 +151,12 @@ impl LiveServer {
     /// Publishes `msg` on `topic`, stamped `at`, to every client subscribed to it.
     pub fn publish(&self, topic: &str, at: Stamp, msg: &Encoded) {
         let channel = self.advertise(topic, msg);
+        let latched = LATCHED.contains(&topic);
+        if !latched && self.shared.clients.lock().expect("not poisoned").is_empty() {
+            return; // nobody to send it to: no copy
+        }
         let payload = Arc::new(msg.cdr.clone());
-        if LATCHED.contains(&topic) {
+        if latched {
             self.shared
                 .latched
                 .lock()
