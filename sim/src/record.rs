@@ -80,6 +80,8 @@ pub struct RunRecord {
     /// Every call the controller made through the hardware contract, with its answer: what
     /// `twin run --replay` plays back.
     pub tape: Vec<robot::replay::Exchange>,
+    /// What the navigating steps (`goto`, `explore`) decided, in order.
+    pub decisions: Vec<DecisionRecord>,
 }
 
 /// What the localisation made of a run's scans.
@@ -111,7 +113,79 @@ impl LocalisationRecord {
     }
 }
 
+/// How a navigating step (`goto`, `explore`) ended, against the truth.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct NavigationResult {
+    /// When it ended, seconds.
+    pub t: f64,
+    /// Its goal (none when exploring).
+    pub goal: Option<[f64; 2]>,
+    /// What the controller said.
+    pub outcome: robot::control::NavOutcome,
+    /// The true distance to the goal then, metres (none when exploring).
+    pub true_distance_m: Option<f64>,
+}
+
+/// Where the robot's footprint came closest to the world.
+#[derive(Copy, Clone, Debug, PartialEq, Serialize)]
+pub struct Approach {
+    /// Clearance between the footprint and the nearest wall or box, metres (0 or less: touching).
+    pub clearance_m: f64,
+    /// When, seconds.
+    pub t: f64,
+    /// Where the base was then (truth).
+    pub pose: [f64; 3],
+}
+
 impl RunRecord {
+    /// The true pose at `stamp` (the last one recorded at or before it).
+    pub fn truth_at(&self, stamp: Stamp) -> Pose2 {
+        let i = self.true_path.partition_point(|(t, _)| *t <= stamp);
+        self.true_path
+            .get(i.saturating_sub(1))
+            .map_or(self.final_truth, |(_, p)| *p)
+    }
+
+    /// How each navigating step ended, in order.
+    pub fn navigation_results(&self) -> Vec<NavigationResult> {
+        self.decisions
+            .iter()
+            .filter_map(|d| match d.decision {
+                robot::control::Decision::Done(outcome) => {
+                    let truth = self.truth_at(Stamp::from_secs_f64(d.t));
+                    Some(NavigationResult {
+                        t: d.t,
+                        goal: d.goal,
+                        outcome,
+                        true_distance_m: d.goal.map(|g| (g[0] - truth.x).hypot(g[1] - truth.y)),
+                    })
+                }
+                robot::control::Decision::Motion { .. } => None,
+            })
+            .collect()
+    }
+
+    /// Where the round footprint (`radius` m, centred `center_x` m ahead of the axle) came
+    /// closest to the walls and boxes of `map` along the true path.
+    pub fn closest_approach(
+        &self,
+        map: &crate::world::WorldMap,
+        radius: f64,
+        center_x: f64,
+    ) -> Option<Approach> {
+        self.true_path
+            .iter()
+            .map(|(t, p)| {
+                let (x, y) = p.transform_point(center_x, 0.0);
+                Approach {
+                    clearance_m: map.clearance([x, y]) - radius,
+                    t: t.secs_f64(),
+                    pose: [p.x, p.y, p.theta],
+                }
+            })
+            .min_by(|a, b| a.clearance_m.total_cmp(&b.clearance_m))
+    }
+
     /// Simulated seconds.
     pub fn sim_seconds(&self) -> f64 {
         self.end.secs_f64()
@@ -219,4 +293,19 @@ impl Reconstruction {
     pub fn placed(&self, placement: Placement) -> Option<&PlacedModel> {
         self.models.iter().find(|m| m.placement == placement)
     }
+}
+
+/// What a navigating step decided, and where it believed the robot was.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct DecisionRecord {
+    /// The stamp of the last status report, seconds.
+    pub t: f64,
+    /// The estimate steered by, map frame: x, y (m), heading (rad).
+    pub estimate: [f64; 3],
+    /// The odometry then.
+    pub odometry: [f64; 3],
+    /// The goal of a `goto` step, map frame (none when exploring).
+    pub goal: Option<[f64; 2]>,
+    /// The decision.
+    pub decision: robot::control::Decision,
 }

@@ -69,6 +69,19 @@ pub enum Step {
         /// The four pan positions.
         pans: [u8; 4],
     },
+    /// Go to a goal in the map frame, metres, avoiding what the laser and the sonar see, with
+    /// the scan-matching estimate (`goto X Y`; see [`crate::control::navigate`]).
+    Goto {
+        /// Goal, map frame, metres.
+        x: f64,
+        /// Goal, map frame, metres.
+        y: f64,
+    },
+    /// Follow walls on the right for this long, robot time (`explore SECONDS`).
+    Explore {
+        /// Duration, seconds.
+        seconds: f64,
+    },
 }
 
 /// The tilts of a scene when the step does not say: the thesis's 100 positions.
@@ -81,7 +94,7 @@ pub const SURVEY_PANS: [u8; 4] = [0, 64, 127, 191];
 pub enum StepError {
     /// The text is not a step.
     #[error(
-        "{0}; a step is a firmware command (a535, i78, k5 30 50, v130 130, p, w1000) or move METRES, turn DEGREES, pause SECONDS, head PAN TILT, sweep PAN FROM TO STEP, scene PAN [FROM TO], survey [P1 P2 P3 P4]"
+        "{0}; a step is a firmware command (a535, i78, k5 30 50, v130 130, p, w1000) or move METRES, turn DEGREES, pause SECONDS, head PAN TILT, sweep PAN FROM TO STEP, scene PAN [FROM TO], survey [P1 P2 P3 P4], goto X Y, explore SECONDS"
     )]
     Command(#[from] CommandTextError),
     /// A number of an SI step is missing or not finite.
@@ -128,7 +141,9 @@ impl Step {
             | Step::Head { .. }
             | Step::Sweep { .. }
             | Step::Scene { .. }
-            | Step::Survey { .. } => None,
+            | Step::Survey { .. }
+            | Step::Goto { .. }
+            | Step::Explore { .. } => None,
         })
     }
 
@@ -200,6 +215,34 @@ impl FromStr for Step {
                     });
                 }
                 Ok(Step::Pause { seconds })
+            }
+            "goto" => {
+                let bad = || StepError::Number {
+                    keyword: "goto",
+                    unit: "X Y: the goal in the map frame, metres",
+                    text: rest.trim().to_string(),
+                };
+                let values: Vec<f64> = rest
+                    .split_whitespace()
+                    .map(|v| v.parse::<f64>().ok().filter(|x| x.is_finite() && x.abs() < 1e6))
+                    .collect::<Option<_>>()
+                    .ok_or_else(bad)?;
+                match values.as_slice() {
+                    &[x, y] => Ok(Step::Goto { x, y }),
+                    _ => Err(bad()),
+                }
+            }
+            "explore" => {
+                const UNIT: &str = "seconds, 0 to 3600";
+                let seconds = number("explore", UNIT)?;
+                if !(0.0..=MAX_PAUSE_S).contains(&seconds) {
+                    return Err(StepError::Number {
+                        keyword: "explore",
+                        unit: UNIT,
+                        text: rest.trim().to_string(),
+                    });
+                }
+                Ok(Step::Explore { seconds })
             }
             "head" | "sweep" | "scene" | "survey" => {
                 use crate::hardware::{PAN_MAX, TILT_MAX};
@@ -276,6 +319,8 @@ impl fmt::Display for Step {
             Step::Move { metres } => write!(f, "move {metres}"),
             Step::Turn { degrees } => write!(f, "turn {degrees}"),
             Step::Pause { seconds } => write!(f, "pause {seconds}"),
+            Step::Goto { x, y } => write!(f, "goto {x} {y}"),
+            Step::Explore { seconds } => write!(f, "explore {seconds}"),
             Step::Head { pan, tilt } => write!(f, "head {pan} {tilt}"),
             Step::Sweep {
                 pan,
@@ -394,6 +439,25 @@ mod tests {
             "move 100".parse::<Step>().unwrap().to_line(&G),
             Err(StepError::TooLong(_))
         ));
+    }
+
+    #[test]
+    fn navigation_steps_parse_print_and_refuse_bad_numbers() {
+        assert_eq!(
+            "goto 3.5 -1".parse::<Step>().unwrap(),
+            Step::Goto { x: 3.5, y: -1.0 }
+        );
+        assert_eq!(
+            "explore 60".parse::<Step>().unwrap(),
+            Step::Explore { seconds: 60.0 }
+        );
+        for bad in ["goto 1", "goto 1 2 3", "goto x 2", "goto NaN 1", "explore -1", "explore"] {
+            let e = bad.parse::<Step>().unwrap_err().to_string();
+            assert!(e.contains(bad.split(' ').next().unwrap()), "{bad}: {e}");
+        }
+        for text in ["goto 3.5 -1", "explore 60"] {
+            assert_eq!(text.parse::<Step>().unwrap().to_string(), text);
+        }
     }
 
     #[test]

@@ -18,12 +18,15 @@
 //!   counts per tick the 8-bit encoder accumulators saturate meanwhile and counts are lost, so the
 //!   robot overshoots and the odometry falls short. Use it with a slow ramp (`k5 12 50`).
 
+use crate::control::navigate::{
+    Decision, NavConfig, NavOutcome, Progress, Surroundings, explore_decision, goto_decision,
+};
 use crate::control::script::{SCENE_TILTS, Step, StepError};
 use crate::drive_geometry::DriveGeometry;
 use crate::geometry::Pose2;
 use crate::hardware::{
     DriveBase, DriveCommand, DriveStatus, DriveWait, HardwareError, Laser, LaserScan, PAN_MAX,
-    PanTilt, PanTiltPosition, TILT_MAX,
+    PanTilt, PanTiltPosition, SonarRing, TILT_MAX,
 };
 use crate::odometry::{Odometer, PoseHistory};
 use crate::protocol::base::DriveLine;
@@ -58,6 +61,8 @@ pub struct TourConfig {
     /// A motion that has not ended after this long (robot time) fails the tour; so does a laser
     /// that sends nothing for this long.
     pub motion_timeout: Duration,
+    /// How `goto` and `explore` steps drive, and what the robot senses them with.
+    pub navigation: NavConfig,
 }
 
 impl TourConfig {
@@ -79,6 +84,7 @@ impl Default for TourConfig {
             },
             poll: Duration::from_millis(50),
             motion_timeout: Duration::from_secs(120),
+            navigation: NavConfig::default(),
         }
     }
 }
@@ -104,6 +110,50 @@ pub enum TourEvent<'a> {
         /// The 3D scene the scan belongs to, if a `scene` or `survey` step took it.
         scene: Option<SceneTag>,
     },
+    /// A `goto` or `explore` step decided what to do next (or that it is over).
+    Decision {
+        /// When, the stamp of the last status report.
+        stamp: Stamp,
+        /// Where the robot believed it was (map frame): the estimate carried forward by
+        /// odometry, or the odometry alone when nothing localises.
+        estimate: Pose2,
+        /// The odometry then.
+        odometry: Pose2,
+        /// The goal of a `goto` step, map frame (none when exploring).
+        goal: Option<[f64; 2]>,
+        /// What it decided.
+        decision: &'a Decision,
+    },
+}
+
+/// Where the localisation last placed the robot: what a navigating step steers by.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Fix {
+    /// The estimate at the last placed scan, map frame.
+    pub estimate: Pose2,
+    /// The odometry at that scan.
+    pub odometry: Pose2,
+    /// Scan matches not trusted in a row up to that scan (0 when the last one was trusted).
+    pub untrusted: usize,
+}
+
+/// What watches a tour: it gets the tour's events and, for the steps that navigate, tells
+/// where the localisation has placed the robot. A closure taking [`TourEvent`]s is an observer
+/// that does not localise (navigation then steers by odometry).
+pub trait TourObserver {
+    /// One event of the tour.
+    fn event(&mut self, event: TourEvent<'_>);
+
+    /// The localisation's latest fix, if it localises.
+    fn fix(&self) -> Option<Fix> {
+        None
+    }
+}
+
+impl<F: FnMut(TourEvent<'_>)> TourObserver for F {
+    fn event(&mut self, event: TourEvent<'_>) {
+        self(event)
+    }
 }
 
 /// Which 3D scene a scan belongs to, and where it was taken.
@@ -168,6 +218,10 @@ pub struct TourReport {
     /// Motions that ended short of their target with the motors left on, stopped with `p`
     /// (see [`STALL`]).
     pub stalled: usize,
+    /// `goto` and `explore` steps that did what they were asked.
+    pub navigated: usize,
+    /// `goto` and `explore` steps that stopped short (blocked, no way, lost, out of decisions).
+    pub navigation_failures: usize,
 }
 
 /// A motion whose counters have not moved for this long (robot time) while the firmware still
@@ -178,6 +232,58 @@ pub struct TourReport {
 /// main loop decides, and answering `l` polls while moving shifts that timing — the wheels stand
 /// still with the motors on for ever. The tour then stops them with `p`, as a driver would.
 pub const STALL: Duration = Duration::from_millis(500);
+
+/// Readings nearer than this to a neighbour's are corroborated, metres.
+const NEIGHBOUR_M: f64 = 0.1;
+
+/// The readings of `scan` (beam, range) that a neighbouring beam corroborates: a surface returns
+/// several adjacent beams, a random outlier (dust, a short reading) one. A controller that
+/// braked for every lone reading would stop for nothing a few times a minute.
+fn corroborated(scan: &LaserScan) -> impl Iterator<Item = (usize, f64)> + '_ {
+    let point = |k: usize| {
+        let r = scan.range_m(k)?;
+        let a = scan.angle(k);
+        Some((r * a.cos(), r * a.sin(), r))
+    };
+    (0..scan.len()).filter_map(move |k| {
+        let (x, y, r) = point(k)?;
+        let near = |j: Option<usize>| {
+            j.and_then(point)
+                .is_some_and(|(u, v, _)| (u - x).hypot(v - y) <= NEIGHBOUR_M)
+        };
+        (near(k.checked_sub(1)) || near(Some(k + 1).filter(|&j| j < scan.len()))).then_some((k, r))
+    })
+}
+
+/// Turns smaller than this are not worth a motion, radians (half a degree).
+const TURN_DEADBAND: f64 = 0.5 * core::f64::consts::PI / 180.0;
+
+/// What a navigating step is after.
+#[derive(Copy, Clone, Debug)]
+enum Task {
+    /// A goal, map frame, metres.
+    Goto([f64; 2]),
+    /// Wall following for this long.
+    Explore(Duration),
+}
+
+impl Task {
+    /// How long the step may take (explore), or no limit (goto).
+    fn duration(&self) -> Duration {
+        match self {
+            Task::Goto(_) => Duration::MAX / 4,
+            Task::Explore(d) => *d,
+        }
+    }
+
+    /// Distance from `pose` to the goal (0 when exploring).
+    fn distance(&self, pose: Pose2) -> f64 {
+        match self {
+            Task::Goto(g) => (g[0] - pose.x).hypot(g[1] - pose.y),
+            Task::Explore(_) => 0.0,
+        }
+    }
+}
 
 /// Watches a motion's counters for a stall.
 #[derive(Default)]
@@ -214,8 +320,8 @@ pub fn run_tour<R, F>(
     mut observer: F,
 ) -> Result<TourReport, TourError<R::Error>>
 where
-    R: DriveBase + Laser + PanTilt,
-    F: FnMut(TourEvent<'_>),
+    R: DriveBase + Laser + PanTilt + SonarRing,
+    F: TourObserver,
 {
     let mut tour = Tour {
         geometry,
@@ -229,9 +335,12 @@ where
         stalled: 0,
         station: None,
         stations: 0,
+        navigated: 0,
+        navigation_failures: 0,
+        surroundings: None,
     };
     for (index, step) in steps.iter().enumerate() {
-        observer(TourEvent::StepStarted {
+        observer.event(TourEvent::StepStarted {
             index,
             total: steps.len(),
             step,
@@ -248,6 +357,8 @@ where
         final_odometry: tour.odometer.pose(),
         end: tour.last_status.map_or(Stamp::ZERO, |s| s.stamp),
         stalled: tour.stalled,
+        navigated: tour.navigated,
+        navigation_failures: tour.navigation_failures,
     })
 }
 
@@ -298,6 +409,12 @@ struct Tour {
     stations: usize,
     /// Motions stopped short with `p`.
     stalled: usize,
+    /// Navigating steps that succeeded.
+    navigated: usize,
+    /// Navigating steps that stopped short.
+    navigation_failures: usize,
+    /// What a navigating step has seen, while one runs.
+    surroundings: Option<Surroundings>,
 }
 
 impl Tour {
@@ -308,8 +425,8 @@ impl Tour {
         observer: &mut F,
     ) -> Result<(), Failure<R::Error>>
     where
-        R: DriveBase + Laser + PanTilt,
-        F: FnMut(TourEvent<'_>),
+        R: DriveBase + Laser + PanTilt + SonarRing,
+        F: TourObserver,
     {
         match step.to_line(&self.geometry).map_err(Failure::Step)? {
             Some(DriveLine::Command(command)) => {
@@ -366,6 +483,12 @@ impl Tour {
                 Step::Survey { pans } => {
                     self.scenes_at(robot, &pans, SCENE_TILTS, observer)?;
                 }
+                Step::Goto { x, y } => {
+                    self.navigate(robot, Task::Goto([x, y]), observer)?;
+                }
+                Step::Explore { seconds } => {
+                    self.navigate(robot, Task::Explore(Duration::from_secs_f64(seconds)), observer)?;
+                }
                 _ => unreachable!("only pauses and head steps send no drive line"),
             },
         }
@@ -383,7 +506,7 @@ impl Tour {
     ) -> Result<(), Failure<R::Error>>
     where
         R: DriveBase + Laser + PanTilt,
-        F: FnMut(TourEvent<'_>),
+        F: TourObserver,
     {
         let settle = self.settle();
         let before = robot.pan_tilt_status().map_err(Failure::Hardware)?;
@@ -460,7 +583,7 @@ impl Tour {
     ) -> Result<(), Failure<R::Error>>
     where
         R: DriveBase + Laser,
-        F: FnMut(TourEvent<'_>),
+        F: TourObserver,
     {
         self.pending.clear();
         let scan = robot
@@ -468,11 +591,198 @@ impl Tour {
             .map_err(Failure::Hardware)?
             .ok_or(Failure::Stuck(self.config.motion_timeout))?;
         self.scans += 1;
-        observer(TourEvent::Scan {
+        observer.event(TourEvent::Scan {
             scan: &scan,
             odometry: self.odometer.pose(),
             scene,
         });
+        if let Some(seen) = &mut self.surroundings {
+            let navigation = &self.config.navigation;
+            if let Some(laser) = navigation.mount.laser_on_base(scan.head)
+                && laser.is_level(navigation.level_tolerance_rad)
+            {
+                let base = self.odometer.pose();
+                let points = corroborated(&scan)
+                    .map(|(k, r)| {
+                        let p = laser.point(scan.angle(k), r);
+                        let (x, y) = base.transform_point(p[0], p[1]);
+                        [x, y]
+                    })
+                    .collect();
+                seen.add_scan(points, navigation.memory);
+            }
+        }
+        Ok(())
+    }
+
+    /// A `goto` or `explore` step: look at rest, decide, turn and move by the firmware's own
+    /// motions, and again, until the step is over (see [`crate::control::navigate`]).
+    fn navigate<R, F>(
+        &mut self,
+        robot: &mut R,
+        task: Task,
+        observer: &mut F,
+    ) -> Result<NavOutcome, Failure<R::Error>>
+    where
+        R: DriveBase + Laser + SonarRing,
+        F: TourObserver,
+    {
+        let config = self.config.navigation;
+        self.surroundings = Some(Surroundings::default());
+        let status = self.poll_status(robot, observer)?;
+        let until = status.stamp + task.duration();
+        self.look(robot, status.stamp, observer)?;
+        let mut progress: Option<Progress> = None;
+        let mut decisions = 0;
+        let outcome = loop {
+            let odometry = self.odometer.pose();
+            let fix = observer.fix();
+            let estimate = fix.map_or(odometry, |f| {
+                f.estimate.compose(&f.odometry.relative(&odometry))
+            });
+            let around = self
+                .surroundings
+                .as_ref()
+                .map(|s| s.around(odometry))
+                .unwrap_or_default();
+            let now = self.last_status.map_or(Stamp::ZERO, |s| s.stamp);
+            let to_go = task.distance(estimate);
+            let decision = match fix {
+                Some(f) if f.untrusted >= config.lost_after => Decision::Done(NavOutcome::Lost {
+                    untrusted: f.untrusted,
+                }),
+                _ if decisions >= config.max_decisions => {
+                    Decision::Done(NavOutcome::OutOfDecisions { distance_m: to_go })
+                }
+                _ => match task {
+                    Task::Goto(goal) => {
+                        let stalled = progress
+                            .get_or_insert_with(|| Progress::new(to_go))
+                            .stalled(to_go, &config);
+                        match goto_decision(estimate, goal, &around, &config) {
+                            Decision::Motion { .. } if stalled => {
+                                Decision::Done(NavOutcome::NoWay { distance_m: to_go })
+                            }
+                            d => d,
+                        }
+                    }
+                    Task::Explore(_) if now >= until => Decision::Done(NavOutcome::Explored),
+                    Task::Explore(_) => explore_decision(&around, &config),
+                },
+            };
+            observer.event(TourEvent::Decision {
+                stamp: now,
+                estimate,
+                odometry,
+                goal: match task {
+                    Task::Goto(goal) => Some(goal),
+                    Task::Explore(_) => None,
+                },
+                decision: &decision,
+            });
+            decisions += 1;
+            match decision {
+                Decision::Done(outcome) => break outcome,
+                Decision::Motion {
+                    turn_rad,
+                    advance_m,
+                    ..
+                } => {
+                    let mut moved = false;
+                    if turn_rad.abs() >= TURN_DEADBAND {
+                        let step = Step::Turn {
+                            degrees: turn_rad.to_degrees(),
+                        };
+                        moved |= self.sensed_motion(robot, &step, observer)?;
+                    }
+                    if advance_m >= config.min_step_m {
+                        let step = Step::Move { metres: advance_m };
+                        moved |= self.sensed_motion(robot, &step, observer)?;
+                    }
+                    if !moved {
+                        // Too small to move: look again rather than decide on the same view.
+                        let status = self.poll_status(robot, observer)?;
+                        self.look(robot, status.stamp, observer)?;
+                    }
+                }
+            }
+        };
+        self.surroundings = None;
+        if outcome.succeeded() {
+            self.navigated += 1;
+        } else {
+            self.navigation_failures += 1;
+        }
+        Ok(outcome)
+    }
+
+    /// One motion of a navigating step, stop-and-go whatever the tour's pacing, then a look at
+    /// rest; whether a motion was sent.
+    fn sensed_motion<R, F>(
+        &mut self,
+        robot: &mut R,
+        step: &Step,
+        observer: &mut F,
+    ) -> Result<bool, Failure<R::Error>>
+    where
+        R: DriveBase + Laser + SonarRing,
+        F: TourObserver,
+    {
+        let Some(DriveLine::Command(command)) =
+            step.to_line(&self.geometry).map_err(Failure::Step)?
+        else {
+            return Ok(false);
+        };
+        self.poll_status(robot, observer)?;
+        robot.drive(command).map_err(Failure::Hardware)?;
+        self.odometer.commanded(&command);
+        self.station = None;
+        let stopped = self.wait_stopped(robot, observer)?;
+        self.look(robot, stopped, observer)?;
+        Ok(true)
+    }
+
+    /// At rest since `stopped`: a scan (to the observer and the surroundings) and, when the
+    /// ring fires, a full cycle of the sonar heard from here.
+    fn look<R, F>(
+        &mut self,
+        robot: &mut R,
+        stopped: Stamp,
+        observer: &mut F,
+    ) -> Result<(), Failure<R::Error>>
+    where
+        R: DriveBase + Laser + SonarRing,
+        F: TourObserver,
+    {
+        let settle = self.settle();
+        self.scan_at_rest(robot, stopped, settle, None, observer)?;
+        let Some(ring) = self.config.navigation.sonar else {
+            return Ok(());
+        };
+        let ms = (ring.cycle.as_secs_f64() * 1000.0 / 1.024).ceil();
+        robot
+            .wait_drive(DriveWait::sleep(ms.clamp(1.0, f64::from(u16::MAX)) as u16))
+            .map_err(Failure::Hardware)?;
+        let echoes = robot.sonar_echoes().map_err(Failure::Hardware)?;
+        let base = self.odometer.pose();
+        let mut points = Vec::new();
+        for (i, &k) in echoes.sequence.iter().enumerate() {
+            let fresh = echoes.measured.get(i).copied().flatten().is_some_and(|t| t >= stopped);
+            let range = echoes.distance_m(i, ring.speed_of_sound);
+            if let (true, Some(range)) = (fresh, range)
+                && range <= ring.max_range_m
+                && k < ring.count
+            {
+                points.extend(ring.echo_points(k, range).map(|p| {
+                    let (x, y) = base.transform_point(p[0], p[1]);
+                    [x, y]
+                }));
+            }
+        }
+        if let Some(seen) = &mut self.surroundings {
+            seen.add_sonar(points, self.config.navigation.memory);
+        }
+        self.poll_status(robot, observer)?;
         Ok(())
     }
 
@@ -486,7 +796,19 @@ impl Tour {
     ) -> Result<(), Failure<R::Error>>
     where
         R: DriveBase + Laser,
-        F: FnMut(TourEvent<'_>),
+        F: TourObserver,
+    {
+        let stopped = self.wait_stopped(robot, observer)?;
+        // Scans measured during the motion are of no use without odometry: skip them.
+        self.scan_at_rest(robot, stopped, settle, None, observer)
+    }
+
+    /// Waits with `w` until the motors are off (stopping a stalled motion with `p`) and reads
+    /// the counters; returns when they were seen off.
+    fn wait_stopped<R, F>(&mut self, robot: &mut R, observer: &mut F) -> Result<Stamp, Failure<R::Error>>
+    where
+        R: DriveBase + Laser,
+        F: TourObserver,
     {
         // `w` waits at most 65535 ticks; a longer motion takes several waits.
         let wait_ms = self
@@ -512,8 +834,7 @@ impl Tour {
                 return Err(Failure::Stuck(self.config.motion_timeout));
             }
         };
-        // Scans measured during the motion are of no use without odometry: skip them.
-        self.scan_at_rest(robot, stopped.stamp, settle, None, observer)
+        Ok(stopped.stamp)
     }
 
     /// Reads scans and polls the base until both drive motors are off.
@@ -525,7 +846,7 @@ impl Tour {
     ) -> Result<(), Failure<R::Error>>
     where
         R: DriveBase + Laser,
-        F: FnMut(TourEvent<'_>),
+        F: TourObserver,
     {
         let mut started: Option<Stamp> = None;
         let mut still = Still::default();
@@ -554,7 +875,7 @@ impl Tour {
     ) -> Result<DriveStatus, Failure<R::Error>>
     where
         R: DriveBase + Laser,
-        F: FnMut(TourEvent<'_>),
+        F: TourObserver,
     {
         robot.drive(DriveCommand::Stop).map_err(Failure::Hardware)?;
         self.odometer.commanded(&DriveCommand::Stop);
@@ -571,7 +892,7 @@ impl Tour {
     ) -> Result<DriveStatus, Failure<R::Error>>
     where
         R: DriveBase + Laser,
-        F: FnMut(TourEvent<'_>),
+        F: TourObserver,
     {
         if let Some(scan) = robot.read_scan(period).map_err(Failure::Hardware)? {
             self.pending.push_back(scan);
@@ -587,7 +908,7 @@ impl Tour {
     ) -> Result<DriveStatus, Failure<R::Error>>
     where
         R: DriveBase + Laser,
-        F: FnMut(TourEvent<'_>),
+        F: TourObserver,
     {
         let status = robot.drive_status().map_err(Failure::Hardware)?;
         let pose = self.odometer.observe(&status);
@@ -598,7 +919,7 @@ impl Tour {
     }
 
     /// Hands over the scans whose stamp the odometry history covers (or all, when finishing).
-    fn emit_ready<F: FnMut(TourEvent<'_>)>(&mut self, observer: &mut F, all: bool) {
+    fn emit_ready<F: TourObserver>(&mut self, observer: &mut F, all: bool) {
         while let Some(scan) = self.pending.front() {
             let odometry = match self.history.at(scan.stamp) {
                 Some(pose) => pose,
@@ -611,7 +932,7 @@ impl Tour {
             };
             let scan = self.pending.pop_front().expect("front exists");
             self.scans += 1;
-            observer(TourEvent::Scan {
+            observer.event(TourEvent::Scan {
                 scan: &scan,
                 odometry,
                 scene: None,
@@ -623,7 +944,7 @@ impl Tour {
     fn finish<R, F>(&mut self, robot: &mut R, observer: &mut F) -> Result<(), Failure<R::Error>>
     where
         R: DriveBase + Laser,
-        F: FnMut(TourEvent<'_>),
+        F: TourObserver,
     {
         if matches!(self.config.pacing, Pacing::Polling { .. }) {
             self.service(robot, self.config.poll, observer)?;

@@ -176,6 +176,57 @@ fn evaluate_one(
         CheckKind::DistanceTravelled => {
             single(record.distance_m, format!("{:.3} m", record.distance_m))
         }
+        CheckKind::GoalError => {
+            let results = record.navigation_results();
+            let worst = results
+                .iter()
+                .filter_map(|r| r.true_distance_m.map(|d| (d, r)))
+                .max_by(|a, b| a.0.total_cmp(&b.0));
+            match worst {
+                Some((d, r)) => single(
+                    d,
+                    format!(
+                        "{d:.3} m (goal {:?}, {} goto steps; {})",
+                        r.goal.unwrap_or_default(),
+                        results.iter().filter(|r| r.goal.is_some()).count(),
+                        r.outcome
+                    ),
+                ),
+                None => outcome("no goto step ended".into(), "goto steps".into(), false),
+            }
+        }
+        CheckKind::NavigationFailures => {
+            let results = record.navigation_results();
+            let failed: Vec<String> = results
+                .iter()
+                .filter(|r| !r.outcome.succeeded())
+                .map(|r| format!("{:.1} s: {}", r.t, r.outcome))
+                .collect();
+            let n = failed.len();
+            let shown = if failed.is_empty() {
+                format!("0 of {}", results.len())
+            } else {
+                format!("{n} of {} ({})", results.len(), failed.join("; "))
+            };
+            single(n as f64, shown)
+        }
+        CheckKind::MinClearance => {
+            let body = &scenario.robot.body;
+            match record.closest_approach(map, body.radius_m.get(), body.center_x_m.get()) {
+                Some(a) => single(
+                    a.clearance_m,
+                    format!(
+                        "{:.3} m at {:.1} s, base at ({:.2}, {:.2})",
+                        a.clearance_m, a.t, a.pose[0], a.pose[1]
+                    ),
+                ),
+                None => outcome("no path".into(), "a run that moved".into(), false),
+            }
+        }
+        CheckKind::Duration => {
+            let t = record.sim_seconds();
+            single(t, format!("{t:.1} s"))
+        }
         CheckKind::OutlierShare => {
             let (mut ghosts, mut total) = (0usize, 0usize);
             for r in &record.scans {

@@ -45,6 +45,8 @@ pub struct DriveRecord {
     pub reconstruction: Option<crate::record::Reconstruction>,
     /// The controller's calls through the contract and their answers (empty when not taped).
     pub tape: Vec<robot::replay::Exchange>,
+    /// What the navigating steps (`goto`, `explore`) decided, in order.
+    pub decisions: Vec<crate::record::DecisionRecord>,
 }
 
 /// Why a drive stopped.
@@ -101,6 +103,7 @@ where
         localisation,
         started,
         Vec::new(),
+        controlled.decisions,
     )
     .map_err(DriveError::Reconstruction)
 }
@@ -116,6 +119,7 @@ impl DriveRecord {
         localisation: Option<(MatcherKind, Vec<Placed>, Vec<[f64; 2]>)>,
         started: Instant,
         tape: Vec<robot::replay::Exchange>,
+        decisions: Vec<crate::record::DecisionRecord>,
     ) -> Result<Self, robot::reconstruction::SceneError> {
         let mount = scenario.robot.mount();
         let inputs: Vec<SceneInput> = scans
@@ -144,6 +148,7 @@ impl DriveRecord {
             wall_seconds: started.elapsed().as_secs_f64(),
             reconstruction,
             tape,
+            decisions,
         })
     }
 
@@ -223,6 +228,9 @@ pub fn write_drive(
             &file("estimate.tum"),
             placed.iter().map(|p| (p.stamp, p.estimate)),
         )?;
+    }
+    if !record.decisions.is_empty() {
+        crate::output::write_decisions(&file("decisions.jsonl"), &record.decisions)?;
     }
     // The world as the scenario declares it (the real room may differ), for `twin view`.
     crate::output::write_world_json(

@@ -62,6 +62,7 @@ pub fn replay_scenario(
         report,
         pan_tilt,
         echoes: _,
+        decisions,
     } = control(
         &mut robot,
         scenario,
@@ -87,5 +88,6 @@ pub fn replay_scenario(
         localisation,
         started,
         robot.into_tape(),
+        decisions,
     )?)
 }

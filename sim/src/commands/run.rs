@@ -6,7 +6,8 @@ use crate::config::scenario::SonarSettings;
 use crate::config::{ConfigError, Scenario};
 use crate::record::{LocalisationRecord, RunRecord, ScanRecord, SonarRecord};
 use crate::twin::sim_robot::{GroundTruth, SimError, SimRobot};
-use robot::control::{TourConfig, TourError, TourEvent, run_tour};
+use crate::record::DecisionRecord;
+use robot::control::{Fix, TourConfig, TourError, TourEvent, TourObserver, run_tour};
 use robot::hardware::{
     DriveBase, DriveWait, Laser, LaserScan, PanTilt, PanTiltPosition, PanTiltStatus, SonarCommand,
     SonarRing,
@@ -142,6 +143,8 @@ pub struct Controlled {
     pub pan_tilt: Option<PanTiltStatus>,
     /// The sonar ring's report at the end, when the scenario fires it.
     pub echoes: Option<robot::hardware::SonarEchoes>,
+    /// What the navigating steps (`goto`, `explore`) decided, in order.
+    pub decisions: Vec<DecisionRecord>,
 }
 
 /// The scenario's controller on `robot`: the head to its position, the sonar started, the
@@ -180,47 +183,30 @@ where
         };
         LevelLocaliser::new(settings.matcher, scenario.robot.mount(), config)
     });
-    let mut localising = 0.0;
-    let mut published_estimates = 0;
     if let Some(live) = &options.live {
         live.announce(scenario);
     }
-    let report = {
-        let mut observer = |event: TourEvent<'_>| match event {
-            TourEvent::StepStarted { index, total, .. } => progress(index, total),
-            TourEvent::Scan {
-                scan,
-                odometry,
-                scene,
-            } => {
-                if let Some(localiser) = &mut localiser {
-                    let clock = Instant::now();
-                    localiser.push(scan, odometry, scene);
-                    localising += clock.elapsed().as_secs_f64();
-                }
-                if let Some(live) = &options.live {
-                    let placed = localiser.as_ref().map_or(&[][..], |l| l.placed());
-                    live.publish(
-                        started,
-                        scan,
-                        odometry,
-                        scenario,
-                        &placed[published_estimates.min(placed.len())..],
-                    );
-                    published_estimates = placed.len();
-                }
-                kept.push((scan.clone(), odometry, scene));
-            }
-        };
-        run_tour(
-            robot,
-            scenario.robot.geometry(),
-            scenario.world.start,
-            &scenario.steps,
-            options.tour.as_ref().unwrap_or(&scenario.tour),
-            &mut observer,
-        )?
+    let mut localising = 0.0;
+    let mut decisions = Vec::new();
+    let watcher = Watcher {
+        scenario,
+        live: options.live.as_ref(),
+        started,
+        progress: &mut progress,
+        localiser: localiser.as_mut(),
+        localising: &mut localising,
+        published_estimates: 0,
+        kept: &mut kept,
+        decisions: &mut decisions,
     };
+    let report = run_tour(
+        robot,
+        scenario.robot.geometry(),
+        scenario.world.start,
+        &scenario.steps,
+        options.tour.as_ref().unwrap_or(&scenario.tour),
+        watcher,
+    )?;
     let echoes = match &scenario.sonar {
         Some(settings) => {
             Some(read_sonar_ring(robot, settings).map_err(|e| hardware_error("(sonar)", e))?)
@@ -244,7 +230,79 @@ where
         report,
         pan_tilt,
         echoes,
+        decisions,
     })
+}
+
+/// The scenario's observer of the tour: feeds the localiser (and the live view), keeps the
+/// scans and the navigating steps' decisions, and tells those steps the localiser's fix.
+struct Watcher<'a, P> {
+    scenario: &'a Scenario,
+    live: Option<&'a Live>,
+    started: Instant,
+    progress: &'a mut P,
+    localiser: Option<&'a mut LevelLocaliser>,
+    localising: &'a mut f64,
+    published_estimates: usize,
+    kept: &'a mut Vec<(LaserScan, robot::Pose2, Option<robot::control::SceneTag>)>,
+    decisions: &'a mut Vec<DecisionRecord>,
+}
+
+impl<P: FnMut(usize, usize)> TourObserver for Watcher<'_, P> {
+    fn event(&mut self, event: TourEvent<'_>) {
+        match event {
+            TourEvent::StepStarted { index, total, .. } => (self.progress)(index, total),
+            TourEvent::Scan {
+                scan,
+                odometry,
+                scene,
+            } => {
+                if let Some(localiser) = &mut self.localiser {
+                    let clock = Instant::now();
+                    localiser.push(scan, odometry, scene);
+                    *self.localising += clock.elapsed().as_secs_f64();
+                }
+                if let Some(live) = self.live {
+                    let placed = self.localiser.as_ref().map_or(&[][..], |l| l.placed());
+                    live.publish(
+                        self.started,
+                        scan,
+                        odometry,
+                        self.scenario,
+                        &placed[self.published_estimates.min(placed.len())..],
+                    );
+                    self.published_estimates = placed.len();
+                }
+                self.kept.push((scan.clone(), odometry, scene));
+            }
+            TourEvent::Decision {
+                stamp,
+                estimate,
+                odometry,
+                goal,
+                decision,
+            } => {
+                let pose = |p: robot::Pose2| [p.x, p.y, p.theta];
+                self.decisions.push(DecisionRecord {
+                    t: stamp.secs_f64(),
+                    estimate: pose(estimate),
+                    odometry: pose(odometry),
+                    goal,
+                    decision: *decision,
+                });
+            }
+        }
+    }
+
+    fn fix(&self) -> Option<Fix> {
+        let placed = self.localiser.as_ref()?.placed();
+        let last = placed.last()?;
+        Some(Fix {
+            estimate: last.estimate,
+            odometry: last.odometry,
+            untrusted: placed.iter().rev().take_while(|p| !p.trusted).count(),
+        })
+    }
 }
 
 /// Runs a scenario to its end. `progress(done, total)` is called before each step.
@@ -277,6 +335,7 @@ pub fn run_scenario(
         report,
         pan_tilt,
         echoes,
+        decisions,
     } = controlled;
     let sonar = echoes.map(|echoes| {
         let model = robot
@@ -351,6 +410,7 @@ pub fn run_scenario(
         localisation,
         reconstruction,
         tape,
+        decisions,
     })
 }
 

@@ -48,6 +48,16 @@ pub enum CheckKind {
     ValidShare,
     /// Median distance (m) between the meshes of two stations where they overlap.
     SeamError(ModelPlacement),
+    /// The largest true distance (m) between the robot and a `goto` step's goal when the step
+    /// ended (whether the controller said it had reached it or stopped short).
+    GoalError,
+    /// `goto` and `explore` steps that stopped short (blocked, no way, lost, out of decisions).
+    NavigationFailures,
+    /// The smallest clearance (m) between the robot's footprint and the world's walls and boxes
+    /// along the true path.
+    MinClearance,
+    /// Simulated seconds the run took.
+    Duration,
 }
 
 /// Which of a run's 3D models a check measures.
@@ -66,7 +76,7 @@ pub enum ModelPlacement {
 
 impl CheckKind {
     /// The names accepted in `kind = "…"`.
-    pub const NAMES: [&'static str; 16] = [
+    pub const NAMES: [&'static str; 20] = [
         "final_estimate_error",
         "rms_estimate_error",
         "odometry_drift",
@@ -83,6 +93,10 @@ impl CheckKind {
         "coverage",
         "valid_share",
         "seam_error",
+        "goal_error",
+        "navigation_failures",
+        "min_clearance",
+        "duration",
     ];
 
     /// The name used in files and reports.
@@ -104,6 +118,10 @@ impl CheckKind {
             CheckKind::Coverage(_) => "coverage",
             CheckKind::ValidShare => "valid_share",
             CheckKind::SeamError(_) => "seam_error",
+            CheckKind::GoalError => "goal_error",
+            CheckKind::NavigationFailures => "navigation_failures",
+            CheckKind::MinClearance => "min_clearance",
+            CheckKind::Duration => "duration",
         }
     }
 
@@ -130,9 +148,12 @@ impl CheckKind {
             | CheckKind::DistanceTravelled
             | CheckKind::PointError(_)
             | CheckKind::PointErrorP95(_)
-            | CheckKind::SeamError(_) => " m",
+            | CheckKind::SeamError(_)
+            | CheckKind::GoalError
+            | CheckKind::MinClearance => " m",
             CheckKind::PhantomArea(_) => " m²",
-            CheckKind::Collisions | CheckKind::Scans => "",
+            CheckKind::Duration => " s",
+            CheckKind::Collisions | CheckKind::Scans | CheckKind::NavigationFailures => "",
             CheckKind::OutlierShare
             | CheckKind::NoReturnShare
             | CheckKind::MapQuality
@@ -186,12 +207,15 @@ pub struct Check {
 }
 
 /// Validates the `[[check]]` tables: a known kind, and the bounds that kind takes.
+/// `navigation` says whether the script has `goto` steps and whether it has any navigating
+/// step (`goto` or `explore`).
 pub(super) fn parse_checks(
     files: &[Spanned<CheckFile>],
     source: &Source,
     localises: bool,
     fires_sonar: bool,
     takes_scenes: bool,
+    navigation: (bool, bool),
 ) -> Result<Vec<Check>, ConfigError> {
     let mut checks = Vec::new();
     for (i, spanned) in files.iter().enumerate() {
@@ -234,6 +258,10 @@ pub(super) fn parse_checks(
             "no_return_share" => CheckKind::NoReturnShare,
             "map_quality" => CheckKind::MapQuality,
             "distance_travelled" => CheckKind::DistanceTravelled,
+            "goal_error" => CheckKind::GoalError,
+            "navigation_failures" => CheckKind::NavigationFailures,
+            "min_clearance" => CheckKind::MinClearance,
+            "duration" => CheckKind::Duration,
             "sonar_error" => CheckKind::SonarError {
                 transducers: f.transducers.clone().unwrap_or_else(|| vec![0]),
             },
@@ -247,24 +275,30 @@ pub(super) fn parse_checks(
                 ));
             }
         };
-        // Which bounds each kind takes: metres, degrees, counts, shares or square metres.
-        let (metres, degrees, counts, shares, areas) = match kind {
+        // Which bounds each kind takes: metres, degrees, counts, shares, square metres or
+        // seconds.
+        let (metres, degrees, counts, shares, areas, seconds) = match kind {
             CheckKind::FinalEstimateError | CheckKind::RmsEstimateError => {
-                (true, true, false, false, false)
+                (true, true, false, false, false, false)
             }
-            CheckKind::OdometryDrift => (true, true, false, false, false),
+            CheckKind::OdometryDrift => (true, true, false, false, false, false),
             CheckKind::SonarError { .. }
             | CheckKind::DistanceTravelled
             | CheckKind::PointError(_)
             | CheckKind::PointErrorP95(_)
-            | CheckKind::SeamError(_) => (true, false, false, false, false),
-            CheckKind::Collisions | CheckKind::Scans => (false, false, true, false, false),
+            | CheckKind::SeamError(_)
+            | CheckKind::GoalError
+            | CheckKind::MinClearance => (true, false, false, false, false, false),
+            CheckKind::Collisions | CheckKind::Scans | CheckKind::NavigationFailures => {
+                (false, false, true, false, false, false)
+            }
             CheckKind::OutlierShare
             | CheckKind::NoReturnShare
             | CheckKind::MapQuality
             | CheckKind::Coverage(_)
-            | CheckKind::ValidShare => (false, false, false, true, false),
-            CheckKind::PhantomArea(_) => (false, false, false, false, true),
+            | CheckKind::ValidShare => (false, false, false, true, false, false),
+            CheckKind::PhantomArea(_) => (false, false, false, false, true, false),
+            CheckKind::Duration => (false, false, false, false, false, true),
         };
         let given = [
             (
@@ -288,6 +322,7 @@ pub(super) fn parse_checks(
                 f.min_m2.is_some() || f.max_m2.is_some(),
                 areas,
             ),
+            ("min_s / max_s", f.min_s.is_some() || f.max_s.is_some(), seconds),
         ];
         for (name, present, allowed) in given {
             if present && !allowed {
@@ -348,6 +383,10 @@ pub(super) fn parse_checks(
             CheckKind::SonarError { .. } if !fires_sonar => {
                 Some("a [sonar] table with fire = true")
             }
+            CheckKind::GoalError if !navigation.0 => Some("`goto X Y` steps in the script"),
+            CheckKind::NavigationFailures if !navigation.1 => {
+                Some("`goto X Y` or `explore SECONDS` steps in the script")
+            }
             _ => None,
         };
         if let Some(what) = needs {
@@ -368,6 +407,11 @@ pub(super) fn parse_checks(
                 min: f.min_m2,
                 max: f.max_m2,
             }
+        } else if seconds {
+            Bounds {
+                min: f.min_s,
+                max: f.max_s,
+            }
         } else {
             Bounds {
                 min: f.min_m,
@@ -380,6 +424,7 @@ pub(super) fn parse_checks(
             (("min", f.min), ("max", f.max)),
             (("min_share", f.min_share), ("max_share", f.max_share)),
             (("min_m2", f.min_m2), ("max_m2", f.max_m2)),
+            (("min_s", f.min_s), ("max_s", f.max_s)),
         ];
         for ((min_name, min), (max_name, max)) in pairs {
             for (name, value) in [(min_name, min), (max_name, max)] {
@@ -434,6 +479,8 @@ pub(super) struct CheckFile {
     max_share: Option<f64>,
     min_m2: Option<f64>,
     max_m2: Option<f64>,
+    min_s: Option<f64>,
+    max_s: Option<f64>,
     placement: Option<String>,
     transducers: Option<Vec<u8>>,
     note: Option<String>,

@@ -34,6 +34,13 @@
 //! settle_s = 0.1                        # stop-and-go: wait after the motors stop
 //! poll_s = 0.05                         # polling: longest wait for a scan between polls
 //!
+//! [navigation]                          # optional: how `goto X Y` and `explore S` steps drive
+//! margin_m = 0.12                       # clearance kept from anything seen
+//! step_m = 0.6                          # longest move before looking again
+//! tolerance_m = 0.15                    # a goal is reached within this
+//! wall_distance_m = 0.45                # explore: the wall kept on the right this far
+//! use_sonar = true                      # hear the ring's echoes too (when [sonar] fires it)
+//!
 //! [localisation]                        # optional: chain the scans into a map while running
 //! matcher = "lorentz"                   # ls, lorentz, lorentz-lines or mbicp
 //! keyframe_distance_m = 0.0             # match each scan to the last one moved this far from
@@ -50,7 +57,7 @@ use super::values::{
 use super::world::{StartFile, WorldDescription};
 use crate::config::Outliers;
 use core::time::Duration;
-use robot::control::{Pacing, Step, TourConfig};
+use robot::control::{NavConfig, Pacing, SonarLayout, Step, TourConfig};
 use robot::localization::UnknownMatcher;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -106,6 +113,15 @@ pub struct SonarSettings {
     pub echo_ms: u16,
     /// Pause before the next shot, ms (`s2 Tr`).
     pub relax_ms: u16,
+}
+
+impl SonarSettings {
+    /// Time for the ring to fire its whole sequence: each shot takes the fire tick, the echo
+    /// window, the relax time and the step to the next.
+    pub fn cycle(&self) -> Duration {
+        let ms = self.sequence.len() as u64 * (u64::from(self.echo_ms) + u64::from(self.relax_ms) + 3);
+        Duration::from_millis(ms)
+    }
 }
 
 /// Localisation during a run: which matcher chains the scans into a map (`[localisation]`).
@@ -263,6 +279,7 @@ impl Scenario {
             }
             _ => None,
         };
+        tour.navigation = navigation(&robot, sonar.as_ref(), file.navigation.as_ref());
         let pan_tilt = match (&robot.pan_tilt, &file.pan_tilt) {
             (None, None) => None,
             (None, Some(_)) => {
@@ -365,6 +382,12 @@ impl Scenario {
             steps
                 .iter()
                 .any(|s| matches!(s, Step::Scene { .. } | Step::Survey { .. })),
+            (
+                steps.iter().any(|s| matches!(s, Step::Goto { .. })),
+                steps
+                    .iter()
+                    .any(|s| matches!(s, Step::Goto { .. } | Step::Explore { .. })),
+            ),
         )?;
         Ok(Scenario {
             name: file.name,
@@ -422,9 +445,59 @@ struct ScenarioFile {
     sonar: Option<SonarFile>,
     pan_tilt: Option<PanTiltFile>,
     localisation: Option<LocalisationFile>,
+    navigation: Option<NavigationFile>,
     reconstruction: Option<ReconstructionFile>,
     #[serde(default)]
     check: Vec<Spanned<CheckFile>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct NavigationFile {
+    margin_m: Option<NonNegative>,
+    step_m: Option<Positive>,
+    tolerance_m: Option<Positive>,
+    wall_distance_m: Option<Positive>,
+    use_sonar: Option<bool>,
+}
+
+/// How the robot's `goto` and `explore` steps drive: its footprint, its laser's mount, the ring
+/// when the scenario fires it, and the scenario's `[navigation]` table.
+fn navigation(
+    robot: &RobotDescription,
+    sonar: Option<&SonarSettings>,
+    file: Option<&NavigationFile>,
+) -> NavConfig {
+    let body = &robot.body;
+    let mut config = NavConfig::new(body.radius_m.get(), body.center_x_m.get(), robot.mount());
+    let use_sonar = file.and_then(|f| f.use_sonar).unwrap_or(true);
+    config.sonar = match (&robot.sonar, sonar) {
+        (Some(ring), Some(settings)) if use_sonar => Some(SonarLayout {
+            count: ring.count,
+            ring_radius_m: ring.ring_radius_m.get(),
+            center_x_m: ring.center_x_m.get(),
+            cone_rad: ring.cone_deg.get().to_radians(),
+            speed_of_sound: robot::hardware::SPEED_OF_SOUND,
+            max_range_m: 5.0f64.min(ring.max_range_m.get()),
+            cycle: settings.cycle(),
+        }),
+        _ => None,
+    };
+    if let Some(f) = file {
+        if let Some(v) = f.margin_m {
+            config.margin_m = v.get();
+        }
+        if let Some(v) = f.step_m {
+            config.step_m = v.get();
+        }
+        if let Some(v) = f.tolerance_m {
+            config.tolerance_m = v.get();
+        }
+        if let Some(v) = f.wall_distance_m {
+            config.wall_distance_m = v.get();
+        }
+    }
+    config
 }
 
 #[derive(Deserialize)]

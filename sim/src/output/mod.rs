@@ -35,6 +35,22 @@ pub use reconstruction::{
 pub use render::{Picture, write_model_png};
 pub use scans::{ScanLine, read_scan_lines, write_scan_lines, write_scans};
 pub use sonar::write_sonar;
+
+/// Writes what the navigating steps decided, one JSON object a line: the stamp `t` (s), the
+/// `estimate` steered by and the `odometry` (x, y m, heading rad), and the `decision` — a
+/// `Motion` (turn, advance, free way) or `Done` with the step's outcome.
+pub fn write_decisions(
+    path: &Path,
+    decisions: &[crate::record::DecisionRecord],
+) -> std::io::Result<()> {
+    use std::io::Write;
+    let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
+    for d in decisions {
+        serde_json::to_writer(&mut out, d)?;
+        out.write_all(b"\n")?;
+    }
+    out.flush()
+}
 pub use summary::{LocalisationSummary, Summary, estimate_errors};
 pub use svg::write_map_svg;
 pub use tilted::{last_tilted, write_tilted_svg};
@@ -233,6 +249,10 @@ pub fn write_all(record: &RunRecord, scenario: &Scenario, dir: &Path) -> std::io
             if let Some(sonar) = &record.sonar {
                 files.push(path("sonar.json"));
                 write_sonar(&path("sonar.json"), sonar)?;
+            }
+            if !record.decisions.is_empty() {
+                files.push(path("decisions.jsonl"));
+                write_decisions(&path("decisions.jsonl"), &record.decisions)?;
             }
             Ok(files)
         })();

@@ -42,6 +42,9 @@ pub struct Summary {
     /// How well the scan-matching estimate followed the truth, when the run localised.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub localisation: Option<LocalisationSummary>,
+    /// How each `goto` or `explore` step ended, against the truth.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub navigation: Vec<crate::record::NavigationResult>,
 }
 
 /// The scan-matching estimate against the truth, at every scan.
@@ -130,6 +133,7 @@ impl Summary {
                 .localisation
                 .as_ref()
                 .map(|loc| LocalisationSummary::of(record, loc)),
+            navigation: record.navigation_results(),
         }
     }
 
