@@ -94,7 +94,7 @@ impl NavConfig {
             tolerance_m: 0.15,
             heading_step_rad: 5f64.to_radians(),
             view_half_rad: 85f64.to_radians(),
-            max_turn_rad: 60f64.to_radians(),
+            max_turn_rad: 30f64.to_radians(),
             memory: 10,
             lost_after: 3,
             patience: 40,

@@ -6,6 +6,7 @@
 pub mod checks;
 mod error;
 pub mod map_image;
+pub mod nav_study;
 mod outliers;
 pub mod robot_file;
 pub mod scenario;
@@ -17,5 +18,6 @@ pub use error::ConfigError;
 pub use outliers::Outliers;
 pub use robot_file::RobotDescription;
 pub use scenario::{NoiseSettings, ReconstructionSettings, Scenario};
+pub use nav_study::NavStudy;
 pub use study::Study;
 pub use world::{Material, Optics, Wall, WorldDescription};

@@ -21,6 +21,7 @@
 //! byte-identical whatever the threads, shards or interruptions; the wall-clock time of each match
 //! goes to `timings.csv` beside them, which naturally differs from run to run.
 
+pub mod navigation;
 pub mod pairs;
 mod report;
 
@@ -467,7 +468,7 @@ pub fn run_study(
 ) -> Result<RunReport, StudyError> {
     let progress_dir = dir.join("progress");
     std::fs::create_dir_all(&progress_dir).map_err(io_error(&progress_dir))?;
-    claim(dir, study, options.shard)?;
+    claim(dir, (&study.text, &study.path), options.shard)?;
     let mut log = Log::open(&progress_dir, study)?;
     let done = log.done.clone();
     let shard = options.shard;
@@ -518,20 +519,20 @@ pub fn run_study(
 }
 
 /// Records which study (and shard) `dir` holds, or checks it is the same.
-fn claim(dir: &Path, study: &Study, shard: Shard) -> Result<(), StudyError> {
+fn claim(dir: &Path, (text, path): (&str, &Path), shard: Shard) -> Result<(), StudyError> {
     let study_file = dir.join("study.toml");
     match std::fs::read_to_string(&study_file) {
-        Ok(text) if text != study.text => {
+        Ok(found) if found != text => {
             return Err(StudyError::OtherStudy {
                 dir: dir.to_path_buf(),
-                study: study.path.clone(),
+                study: path.to_path_buf(),
             });
         }
         Ok(_) => {}
-        Err(_) => std::fs::write(&study_file, &study.text).map_err(io_error(&study_file))?,
+        Err(_) => std::fs::write(&study_file, text).map_err(io_error(&study_file))?,
     }
     let origin = dir.join("study-path");
-    let path = std::fs::canonicalize(&study.path).unwrap_or_else(|_| study.path.clone());
+    let path = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf());
     std::fs::write(&origin, format!("{}\n", path.display())).map_err(io_error(&origin))?;
     let shard_file = dir.join("shard");
     match std::fs::read_to_string(&shard_file) {
@@ -923,6 +924,22 @@ enum MontecarloCommand {
 /// Runs `twin montecarlo` (or its `merge`).
 pub fn main(args: MontecarloArgs) -> Result<(), super::CommandError> {
     if let Some(MontecarloCommand::Merge { dirs, out, quiet }) = args.merge {
+        let first = dirs.first().map(|d| d.join("study.toml"));
+        let text = first
+            .as_ref()
+            .and_then(|p| std::fs::read_to_string(p).ok())
+            .unwrap_or_default();
+        if crate::config::NavStudy::is_navigation(&text) {
+            let (table, files) = navigation::merge(&dirs, &out, &text)?;
+            if !quiet {
+                say!("{}", table.trim_end_matches('\n'));
+                say!("merged {} shard folders into {}", dirs.len(), out.display());
+                for f in &files {
+                    say!("  {}", f.display());
+                }
+            }
+            return Ok(());
+        }
         let (summary, files) = merge(&dirs, &out)?;
         if !quiet {
             say!("{}", summary.table().trim_end_matches('\n'));
@@ -935,7 +952,11 @@ pub fn main(args: MontecarloArgs) -> Result<(), super::CommandError> {
     }
     let path = args
         .study
+        .clone()
         .expect("clap requires the study without a subcommand");
+    if std::fs::read_to_string(&path).is_ok_and(|t| crate::config::NavStudy::is_navigation(&t)) {
+        return navigation_main(&path, &args);
+    }
     let mut study = Study::load(&path)?;
     if let Some(trials) = args.trials {
         study = study.with_trials_per_rate(trials);
@@ -981,6 +1002,65 @@ pub fn main(args: MontecarloArgs) -> Result<(), super::CommandError> {
     match &report.summary {
         Some(summary) => {
             say!("{}", summary.table().trim_end_matches('\n'));
+            say!("wrote {}", dir.display());
+            for f in &report.files {
+                say!("  {}", f.display());
+            }
+        }
+        None => say!(
+            "{} of {} trials of shard {} done; run the same command again to go on",
+            report.resumed + report.ran,
+            report.owned,
+            args.shard
+        ),
+    }
+    Ok(())
+}
+
+/// `twin montecarlo` on a navigation study (a file that names a scenario).
+fn navigation_main(path: &Path, args: &MontecarloArgs) -> Result<(), super::CommandError> {
+    let mut study = crate::config::NavStudy::load(path)?;
+    if let Some(trials) = args.trials {
+        study = study.with_trials_per_condition(trials);
+    }
+    let dir = args.out.clone().unwrap_or_else(|| match args.trials {
+        Some(n) => PathBuf::from("out").join(format!("montecarlo-{}-{n}-per-condition", study.name)),
+        None => PathBuf::from("out").join(format!("montecarlo-{}", study.name)),
+    });
+    let bar = super::bar(
+        args.quiet,
+        args.shard.count_of(study.total_trials()),
+        "{prefix} [{bar:30}] {pos}/{len} runs {rate} ETA {eta}",
+    );
+    bar.set_prefix(format!("{} (shard {})", study.name, args.shard));
+    let options = RunOptions {
+        threads: args.threads,
+        shard: args.shard,
+        max_trials: args.max_trials,
+    };
+    let report = navigation::run_study(&study, &dir, &options, |done, total| {
+        bar.set_length(total);
+        bar.set_position(done);
+    })?;
+    bar.finish_and_clear();
+    if args.quiet {
+        return Ok(());
+    }
+    if report.resumed > 0 {
+        say!(
+            "resumed: {} trials were already done in {}",
+            report.resumed,
+            dir.display()
+        );
+    }
+    say!(
+        "{} closed-loop runs in {:.1} s",
+        report.ran,
+        report.wall_seconds
+    );
+    match &report.table {
+        Some(table) => {
+            say!("{}", table.trim_end_matches('\n'));
             say!("wrote {}", dir.display());
             for f in &report.files {
                 say!("  {}", f.display());
