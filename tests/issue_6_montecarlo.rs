@@ -113,6 +113,29 @@ fn shards_merge_into_the_files_of_a_single_run() {
 }
 
 #[test]
+fn shards_of_a_smaller_study_merge_too() {
+    // `--trials N` rewrites the study's count in the folders' copy; the merge reads the study
+    // from its file and must apply the same count (it refused, "has changed", before).
+    let base = scratch("smaller-shards");
+    let study = small_study(&base, 22).with_trials_per_rate(3);
+    run(&study, &base.join("single"), threads(1));
+    let dirs: Vec<PathBuf> = (0..2)
+        .map(|k| {
+            let dir = base.join(format!("shard-{k}"));
+            let options = RunOptions {
+                threads: 1,
+                shard: Shard { index: k, count: 2 },
+                max_trials: None,
+            };
+            run(&study, &dir, options);
+            dir
+        })
+        .collect();
+    merge(&dirs, &base.join("merged")).unwrap();
+    assert_same_files(&base.join("single"), &base.join("merged"));
+}
+
+#[test]
 fn a_killed_run_resumes_without_repeating_or_losing_trials() {
     let base = scratch("resume");
     let study = small_study(&base, 31);

@@ -18,6 +18,7 @@ mod issue_19_live;
 mod issue_19_maps;
 mod issue_19_recording;
 mod issue_19_replay;
+mod issue_20_navigation;
 mod issue_2_bad_input;
 mod issue_2_collision;
 mod issue_2_contract;

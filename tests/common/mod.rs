@@ -77,7 +77,7 @@ pub fn drive_served(
     >,
     Vec<robot::serial::LinkEvent>,
 ) {
-    use sim::commands::serve::{Offer, ServeOptions, Server, WallClock};
+    use sim::commands::serve::{Offer, ServeOptions, Served, Server, WallClock};
     use std::sync::Arc;
     use std::sync::atomic::{AtomicBool, Ordering};
     let twin = Twin::new(
@@ -90,13 +90,28 @@ pub fn drive_served(
     let options = ServeOptions {
         speed,
         base: Offer::Tcp("127.0.0.1:0".into()),
-        pan_tilt: Some(Offer::Tcp("127.0.0.1:0".into())),
+        pan_tilt: scenario
+            .robot
+            .pan_tilt
+            .as_ref()
+            .map(|_| Offer::Tcp("127.0.0.1:0".into())),
         laser: Some(Offer::Tcp("127.0.0.1:0".into())),
         live: None,
     };
     let mut server = Server::new(twin, &options).unwrap();
-    let at = |i: usize| server.addresses()[i].1.parse().unwrap();
-    let config = sim::commands::drive::serial_config(scenario, at(0), Some(at(1)), Some(at(2)));
+    let at = |device: Served| {
+        server
+            .addresses()
+            .into_iter()
+            .find(|(d, _)| *d == device)
+            .map(|(_, a)| a.parse().unwrap())
+    };
+    let config = sim::commands::drive::serial_config(
+        scenario,
+        at(Served::Base).unwrap(),
+        at(Served::PanTilt),
+        at(Served::Laser),
+    );
     let stop = Arc::new(AtomicBool::new(false));
     let flag = Arc::clone(&stop);
     let handle = std::thread::spawn(move || server.run(&flag, None, |_, _| {}));

@@ -303,10 +303,9 @@ impl fmt::Display for NavOutcome {
                 f,
                 "lost: the last {untrusted} scan matches were not trusted"
             ),
-            NavOutcome::OutOfDecisions { distance_m } => write!(
-                f,
-                "out of decisions with {distance_m:.2} m to go"
-            ),
+            NavOutcome::OutOfDecisions { distance_m } => {
+                write!(f, "out of decisions with {distance_m:.2} m to go")
+            }
         }
     }
 }
@@ -317,7 +316,10 @@ pub const FAR_M: f64 = 100.0;
 /// How far the robot's footprint, inflated by `margin`, can go along `heading` (its frame)
 /// after turning to it in place: the footprint's centre swings round the axle with the turn.
 fn free_along(points: &[[f64; 2]], heading: f64, margin: f64, config: &NavConfig) -> f64 {
-    let (cx, cy) = (config.center_x_m * heading.cos(), config.center_x_m * heading.sin());
+    let (cx, cy) = (
+        config.center_x_m * heading.cos(),
+        config.center_x_m * heading.sin(),
+    );
     let shifted = points.iter().map(|p| [p[0] - cx, p[1] - cy]);
     free_distance(shifted, heading, config.radius_m + margin).min(FAR_M)
 }
@@ -505,7 +507,10 @@ mod tests {
         let c = NavConfig::default();
         // A point 0.5 m ahead: the body's centre is 4.55 cm behind the axle.
         let ahead = free_along(&[[0.5, 0.0]], 0.0, 0.0, &c);
-        assert!((ahead - (0.5 - c.center_x_m - c.radius_m)).abs() < 1e-9, "{ahead}");
+        assert!(
+            (ahead - (0.5 - c.center_x_m - c.radius_m)).abs() < 1e-9,
+            "{ahead}"
+        );
         // A door 0.65 m wide, 1 m ahead: too narrow for the full margin, through with the
         // tight one.
         let mut door = wall(1.0, -2.0, -0.325);
@@ -568,14 +573,18 @@ mod tests {
             })
             .collect();
         let d = goto_decision(Pose2::IDENTITY, [3.0, 0.0], &ring, &c);
-        assert!(matches!(d, Decision::Done(NavOutcome::Blocked { nearest_m }) if (nearest_m - 0.3).abs() < 1e-9));
+        assert!(
+            matches!(d, Decision::Done(NavOutcome::Blocked { nearest_m }) if (nearest_m - 0.3).abs() < 1e-9)
+        );
     }
 
     #[test]
     fn the_wall_follower_keeps_the_wall_on_its_right() {
         let c = NavConfig::default();
         // A wall along the right, 0.8 m away: go on along it.
-        let side: Vec<[f64; 2]> = (0..200).map(|i| [-1.0 + 0.02 * f64::from(i), -0.8]).collect();
+        let side: Vec<[f64; 2]> = (0..200)
+            .map(|i| [-1.0 + 0.02 * f64::from(i), -0.8])
+            .collect();
         let Decision::Motion { turn_rad, .. } = explore_decision(&side, &c) else {
             panic!()
         };

@@ -224,7 +224,11 @@ impl FromStr for Step {
                 };
                 let values: Vec<f64> = rest
                     .split_whitespace()
-                    .map(|v| v.parse::<f64>().ok().filter(|x| x.is_finite() && x.abs() < 1e6))
+                    .map(|v| {
+                        v.parse::<f64>()
+                            .ok()
+                            .filter(|x| x.is_finite() && x.abs() < 1e6)
+                    })
                     .collect::<Option<_>>()
                     .ok_or_else(bad)?;
                 match values.as_slice() {
@@ -451,7 +455,14 @@ mod tests {
             "explore 60".parse::<Step>().unwrap(),
             Step::Explore { seconds: 60.0 }
         );
-        for bad in ["goto 1", "goto 1 2 3", "goto x 2", "goto NaN 1", "explore -1", "explore"] {
+        for bad in [
+            "goto 1",
+            "goto 1 2 3",
+            "goto x 2",
+            "goto NaN 1",
+            "explore -1",
+            "explore",
+        ] {
             let e = bad.parse::<Step>().unwrap_err().to_string();
             assert!(e.contains(bad.split(' ').next().unwrap()), "{bad}: {e}");
         }

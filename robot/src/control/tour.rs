@@ -487,7 +487,11 @@ impl Tour {
                     self.navigate(robot, Task::Goto([x, y]), observer)?;
                 }
                 Step::Explore { seconds } => {
-                    self.navigate(robot, Task::Explore(Duration::from_secs_f64(seconds)), observer)?;
+                    self.navigate(
+                        robot,
+                        Task::Explore(Duration::from_secs_f64(seconds)),
+                        observer,
+                    )?;
                 }
                 _ => unreachable!("only pauses and head steps send no drive line"),
             },
@@ -767,7 +771,12 @@ impl Tour {
         let base = self.odometer.pose();
         let mut points = Vec::new();
         for (i, &k) in echoes.sequence.iter().enumerate() {
-            let fresh = echoes.measured.get(i).copied().flatten().is_some_and(|t| t >= stopped);
+            let fresh = echoes
+                .measured
+                .get(i)
+                .copied()
+                .flatten()
+                .is_some_and(|t| t >= stopped);
             let range = echoes.distance_m(i, ring.speed_of_sound);
             if let (true, Some(range)) = (fresh, range)
                 && range <= ring.max_range_m
@@ -805,7 +814,11 @@ impl Tour {
 
     /// Waits with `w` until the motors are off (stopping a stalled motion with `p`) and reads
     /// the counters; returns when they were seen off.
-    fn wait_stopped<R, F>(&mut self, robot: &mut R, observer: &mut F) -> Result<Stamp, Failure<R::Error>>
+    fn wait_stopped<R, F>(
+        &mut self,
+        robot: &mut R,
+        observer: &mut F,
+    ) -> Result<Stamp, Failure<R::Error>>
     where
         R: DriveBase + Laser,
         F: TourObserver,

@@ -4,9 +4,9 @@
 use super::reconstruct::{SceneInput, reconstruct};
 use crate::config::scenario::SonarSettings;
 use crate::config::{ConfigError, Scenario};
+use crate::record::DecisionRecord;
 use crate::record::{LocalisationRecord, RunRecord, ScanRecord, SonarRecord};
 use crate::twin::sim_robot::{GroundTruth, SimError, SimRobot};
-use crate::record::DecisionRecord;
 use robot::control::{Fix, TourConfig, TourError, TourEvent, TourObserver, run_tour};
 use robot::hardware::{
     DriveBase, DriveWait, Laser, LaserScan, PanTilt, PanTiltPosition, PanTiltStatus, SonarCommand,

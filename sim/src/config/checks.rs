@@ -322,7 +322,11 @@ pub(super) fn parse_checks(
                 f.min_m2.is_some() || f.max_m2.is_some(),
                 areas,
             ),
-            ("min_s / max_s", f.min_s.is_some() || f.max_s.is_some(), seconds),
+            (
+                "min_s / max_s",
+                f.min_s.is_some() || f.max_s.is_some(),
+                seconds,
+            ),
         ];
         for (name, present, allowed) in given {
             if present && !allowed {

@@ -15,9 +15,9 @@ pub mod values;
 pub mod world;
 
 pub use error::ConfigError;
+pub use nav_study::NavStudy;
 pub use outliers::Outliers;
 pub use robot_file::RobotDescription;
 pub use scenario::{NoiseSettings, ReconstructionSettings, Scenario};
-pub use nav_study::NavStudy;
 pub use study::Study;
 pub use world::{Material, Optics, Wall, WorldDescription};

@@ -75,8 +75,7 @@ impl NavStudy {
     /// saying so.
     pub fn with_trials_per_condition(mut self, trials: u64) -> Self {
         let trials = trials.max(1);
-        let line =
-            format!("trials_per_condition = {trials}  # twin montecarlo --trials {trials}");
+        let line = format!("trials_per_condition = {trials}  # twin montecarlo --trials {trials}");
         self.text = self
             .text
             .lines()

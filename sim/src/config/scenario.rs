@@ -119,7 +119,8 @@ impl SonarSettings {
     /// Time for the ring to fire its whole sequence: each shot takes the fire tick, the echo
     /// window, the relax time and the step to the next.
     pub fn cycle(&self) -> Duration {
-        let ms = self.sequence.len() as u64 * (u64::from(self.echo_ms) + u64::from(self.relax_ms) + 3);
+        let ms =
+            self.sequence.len() as u64 * (u64::from(self.echo_ms) + u64::from(self.relax_ms) + 3);
         Duration::from_millis(ms)
     }
 }

@@ -847,7 +847,13 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(Summary, Vec<PathBuf>), St
     // study from where the shards' run recorded it, and check it is still the same text.
     let origin_path = first.join("study-path");
     let origin = std::fs::read_to_string(&origin_path).map_err(io_error(&origin_path))?;
-    let study = Study::load(origin.trim()).map_err(|e| StudyError::Merge(e.to_string()))?;
+    let mut study = Study::load(origin.trim()).map_err(|e| StudyError::Merge(e.to_string()))?;
+    // Shards of a smaller study (`--trials N`) carry the rewritten count.
+    if let Some(n) = count_in(&text, "trials_per_rate")
+        && n != study.trials_per_rate
+    {
+        study = study.with_trials_per_rate(n);
+    }
     if study.text != text {
         return Err(StudyError::Merge(format!(
             "{} has changed since the shards ran",
@@ -864,6 +870,20 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(Summary, Vec<PathBuf>), St
         )));
     }
     write_results(&study, out, rows, timings)
+}
+
+/// The count a study's text gives `key` (`key = N  # comment`), if it gives one.
+fn count_in(text: &str, key: &str) -> Option<u64> {
+    text.lines().find_map(|l| {
+        let v = l.trim_start().strip_prefix(key)?;
+        v.trim_start()
+            .strip_prefix('=')?
+            .split('#')
+            .next()?
+            .trim()
+            .parse()
+            .ok()
+    })
 }
 
 /// Where a study's outputs go by default.
@@ -1024,7 +1044,9 @@ fn navigation_main(path: &Path, args: &MontecarloArgs) -> Result<(), super::Comm
         study = study.with_trials_per_condition(trials);
     }
     let dir = args.out.clone().unwrap_or_else(|| match args.trials {
-        Some(n) => PathBuf::from("out").join(format!("montecarlo-{}-{n}-per-condition", study.name)),
+        Some(n) => {
+            PathBuf::from("out").join(format!("montecarlo-{}-{n}-per-condition", study.name))
+        }
         None => PathBuf::from("out").join(format!("montecarlo-{}", study.name)),
     });
     let bar = super::bar(

@@ -525,8 +525,10 @@ fn trajectories_svg(
         Swatch::Line("#9a9a9a", 3.0, None),
         &format!(r##"<path d="{walls}" stroke="#9a9a9a" stroke-width="3" fill="none"/>"##),
     );
-    let condition_of: BTreeMap<u64, &str> =
-        rows.iter().map(|(i, r)| (*i, r.condition.as_str())).collect();
+    let condition_of: BTreeMap<u64, &str> = rows
+        .iter()
+        .map(|(i, r)| (*i, r.condition.as_str()))
+        .collect();
     let crashed: BTreeSet<u64> = rows
         .iter()
         .filter(|(_, r)| r.collisions > 0)
@@ -629,11 +631,21 @@ fn trajectories_svg(
 }
 
 /// Combines finished shard folders of a navigation study into `out`.
-pub fn merge(dirs: &[PathBuf], out: &Path, text: &str) -> Result<(String, Vec<PathBuf>), StudyError> {
+pub fn merge(
+    dirs: &[PathBuf],
+    out: &Path,
+    text: &str,
+) -> Result<(String, Vec<PathBuf>), StudyError> {
     let first = &dirs[0];
     let origin_path = first.join("study-path");
     let origin = std::fs::read_to_string(&origin_path).map_err(io_error(&origin_path))?;
-    let study = NavStudy::load(origin.trim()).map_err(|e| StudyError::Merge(e.to_string()))?;
+    let mut study = NavStudy::load(origin.trim()).map_err(|e| StudyError::Merge(e.to_string()))?;
+    // Shards of a smaller study (`--trials N`) carry the rewritten count.
+    if let Some(n) = super::count_in(text, "trials_per_condition")
+        && n != study.trials_per_condition
+    {
+        study = study.with_trials_per_condition(n);
+    }
     if study.text != text {
         return Err(StudyError::Merge(format!(
             "{} has changed since the shards ran",
