@@ -307,7 +307,7 @@ fn bad_navigation_studies_and_steps_are_named() {
             format!("{base}[[condition]]\nname = \"a, b\"\n"),
             "condition[0].name",
         ),
-        (format!("{base}"), "condition"),
+        (base.clone(), "condition"),
         (
             format!("{base}[[condition]]\nname = \"a\"\nnoise = {{ outliers = \"lots\" }}\n"),
             "noise.outliers",

@@ -92,20 +92,8 @@ where
         |_| Ok(()),
         progress,
     )?;
-    let localisation = controlled
-        .localisation
-        .map(|l| (l.matcher, l.placed, l.map));
-    DriveRecord::assemble(
-        &scenario,
-        controlled.kept,
-        &controlled.report,
-        controlled.pan_tilt,
-        localisation,
-        started,
-        Vec::new(),
-        controlled.decisions,
-    )
-    .map_err(DriveError::Reconstruction)
+    DriveRecord::assemble(&scenario, controlled, started, Vec::new())
+        .map_err(DriveError::Reconstruction)
 }
 
 impl DriveRecord {
@@ -113,14 +101,19 @@ impl DriveRecord {
     /// scans (placed by the estimate and by odometry; no truth to score them against).
     pub fn assemble(
         scenario: &Scenario,
-        scans: Vec<(LaserScan, Pose2, Option<SceneTag>)>,
-        report: &robot::control::TourReport,
-        pan_tilt: Option<PanTiltStatus>,
-        localisation: Option<(MatcherKind, Vec<Placed>, Vec<[f64; 2]>)>,
+        controlled: super::run::Controlled,
         started: Instant,
         tape: Vec<robot::replay::Exchange>,
-        decisions: Vec<crate::record::DecisionRecord>,
     ) -> Result<Self, robot::reconstruction::SceneError> {
+        let super::run::Controlled {
+            kept: scans,
+            localisation,
+            report,
+            pan_tilt,
+            echoes: _,
+            decisions,
+        } = controlled;
+        let localisation = localisation.map(|l| (l.matcher, l.placed, l.map));
         let mount = scenario.robot.mount();
         let inputs: Vec<SceneInput> = scans
             .iter()

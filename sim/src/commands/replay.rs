@@ -8,7 +8,7 @@
 //! since the recording is stopped at its first call the tape does not hold.
 
 use super::drive::DriveRecord;
-use super::run::{Controlled, RunOptions, control};
+use super::run::{RunOptions, control};
 use crate::config::Scenario;
 use robot::control::TourError;
 use robot::replay::{Exchange, ReplayError, ReplayRobot};
@@ -56,14 +56,7 @@ pub fn replay_scenario(
         scenario: scenario.name.clone(),
         source,
     };
-    let Controlled {
-        kept,
-        localisation,
-        report,
-        pan_tilt,
-        echoes: _,
-        decisions,
-    } = control(
+    let controlled = control(
         &mut robot,
         scenario,
         &RunOptions::default(),
@@ -78,16 +71,11 @@ pub fn replay_scenario(
             recorded,
         });
     }
-    let localisation = localisation.map(|l| (l.matcher, l.placed, l.map));
     // Recorded again with the outputs: a replay replays too.
     Ok(DriveRecord::assemble(
         scenario,
-        kept,
-        &report,
-        pan_tilt,
-        localisation,
+        controlled,
         started,
         robot.into_tape(),
-        decisions,
     )?)
 }

@@ -286,6 +286,30 @@ fn render(record: &RunRecord, world: &WorldDescription, map: &WorldMap) -> Strin
             sy - 5.0
         ),
     );
+    // The goals of `goto` steps, each drawn once, whether reached or not.
+    let mut goals = String::new();
+    let mut drawn: Vec<[f64; 2]> = Vec::new();
+    for g in record.decisions.iter().filter_map(|d| d.goal) {
+        if drawn.contains(&g) {
+            continue;
+        }
+        drawn.push(g);
+        let (gx, gy) = plan.clamped(g[0], g[1]);
+        let _ = write!(
+            goals,
+            r##"<path d="M{:.1} {gy:.1}L{gx:.1} {:.1}L{:.1} {gy:.1}L{gx:.1} {:.1}Z" fill="#e377c2" stroke="black"/>"##,
+            gx - 7.0,
+            gy - 7.0,
+            gx + 7.0,
+            gy + 7.0
+        );
+    }
+    layers.add(
+        "goals",
+        "goals of goto steps",
+        Swatch::Square("#e377c2"),
+        &goals,
+    );
     for (p, colour, key, label) in [
         (record.final_truth, TRUTH, "end-truth", "end, true pose"),
         (
