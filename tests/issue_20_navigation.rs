@@ -218,7 +218,7 @@ fn the_closed_loop_study_is_the_same_whole_sharded_or_resumed() {
     let table = std::fs::read_to_string(whole.join("table.md")).unwrap();
     assert_eq!(
         table.matches("\n| ").count(),
-        4 + 1,
+        5 + 1,
         "a row per condition: {table}"
     );
     let svg_text = std::fs::read_to_string(whole.join("trajectories.svg")).unwrap();
@@ -280,7 +280,7 @@ fn the_closed_loop_study_is_the_same_whole_sharded_or_resumed() {
     same_files(&whole, &merged);
     // Each row: the trial's goals, how many reached, its collisions and clearance.
     let rows = std::fs::read_to_string(whole.join("trials.csv")).unwrap();
-    assert_eq!(rows.lines().count(), 1 + 4);
+    assert_eq!(rows.lines().count(), 1 + 5);
     for row in rows.lines().skip(1) {
         let f: Vec<&str> = row.split(',').collect();
         assert_eq!(f[6], "3", "three goals: {row}");

@@ -4,7 +4,7 @@ pub mod navigate;
 pub mod script;
 pub mod tour;
 
-pub use navigate::{Decision, NavConfig, NavOutcome, SonarLayout};
+pub use navigate::{Decision, Method, NavConfig, NavOutcome, SonarLayout};
 pub use script::{Step, StepError};
 pub use tour::{
     Fix, Pacing, SceneTag, TourConfig, TourError, TourEvent, TourObserver, TourReport, run_tour,

@@ -73,6 +73,8 @@ pub struct NavConfig {
     pub sonar: Option<SonarLayout>,
     /// Where the laser is on the base: its scans become points around the robot.
     pub mount: LaserMount,
+    /// How a `goto` step picks its heading.
+    pub method: Method,
     /// Scans whose plane is further from level than this are not used, radians.
     pub level_tolerance_rad: f64,
 }
@@ -87,6 +89,7 @@ impl NavConfig {
             mount,
             // As the 2D localisation: half a tilt position of the thesis's head.
             level_tolerance_rad: 0.3f64.to_radians(),
+            method: Method::Histogram,
             radius_m,
             margin_m: 0.12,
             step_m: 0.6,
@@ -115,6 +118,30 @@ impl Default for NavConfig {
             z: 0.3,
         };
         NavConfig::new(0.26, -0.0455, mount)
+    }
+}
+
+/// How a `goto` step picks its heading.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// The vector field histogram: the free heading nearest the goal's bearing.
+    Histogram,
+    /// The baseline it is measured against: straight at the goal as far as the way is free,
+    /// blocked when it is not (no way round).
+    Direct,
+}
+
+impl core::str::FromStr for Method {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s {
+            "histogram" => Ok(Method::Histogram),
+            "direct" => Ok(Method::Direct),
+            other => Err(format!(
+                "unknown method {other:?}: expected \"histogram\" or \"direct\""
+            )),
+        }
     }
 }
 
@@ -385,6 +412,15 @@ pub fn goto_decision(
     if direct >= full {
         return motion(bearing, direct, distance, config);
     }
+    if config.method == Method::Direct {
+        return if direct >= config.min_step_m {
+            motion(bearing, direct, distance, config)
+        } else {
+            Decision::Done(NavOutcome::Blocked {
+                nearest_m: nearest(points),
+            })
+        };
+    }
     let cost = |h: f64| wrap_angle(h - bearing).abs() + 0.25 * h.abs();
     // A way open for two steps first: one step into a dead end is no way round.
     let long = distance.min(2.0 * config.step_m);
@@ -555,12 +591,32 @@ mod tests {
             panic!("a way round exists")
         };
         assert!(turn_rad < 0.0, "round the open end, right: {turn_rad}");
-        assert!(advance_m > 0.0);
+        // Either on its way, or turning as far as one motion may before looking again.
+        assert!(
+            advance_m > 0.0 || turn_rad == -c.max_turn_rad,
+            "{advance_m} {turn_rad}"
+        );
         // A goal behind: turn part of the way to look first, no advance.
         let d = goto_decision(Pose2::IDENTITY, [-3.0, 0.0], &[], &c);
         assert!(
             matches!(d, Decision::Motion { advance_m, turn_rad, .. } if advance_m == 0.0 && turn_rad.abs() == c.max_turn_rad)
         );
+    }
+
+    #[test]
+    fn the_direct_baseline_has_no_way_round() {
+        let c = NavConfig {
+            method: Method::Direct,
+            ..NavConfig::default()
+        };
+        let pts = wall(0.4, -0.3, 2.0);
+        let d = goto_decision(Pose2::IDENTITY, [3.0, 0.0], &pts, &c);
+        assert!(
+            matches!(d, Decision::Done(NavOutcome::Blocked { .. })),
+            "{d:?}"
+        );
+        assert_eq!("direct".parse(), Ok(Method::Direct));
+        assert!("astar".parse::<Method>().unwrap_err().contains("histogram"));
     }
 
     #[test]

@@ -14,6 +14,7 @@
 //! name = "outliers 2 %"
 //! noise = { outliers = "thesis-2pct" }     # as a scenario's [noise]
 //! use_sonar = true                         # false: the controller ignores the ring
+//! method = "histogram"                     # or "direct", the baseline (no way round)
 //! ```
 //!
 //! Paths are relative to the study file; the whole text is kept, as for the scan-matching
@@ -148,6 +149,11 @@ impl NavStudy {
             if c.use_sonar == Some(false) {
                 scenario.tour.navigation.sonar = None;
             }
+            if let Some(method) = &c.method {
+                scenario.tour.navigation.method = method.parse().map_err(|e: String| {
+                    source.error_in_file(Some(format!("condition[{i}].method")), e)
+                })?;
+            }
             conditions.push(NavCondition {
                 name: c.name.clone(),
                 scenario,
@@ -190,4 +196,5 @@ struct ConditionFile {
     name: String,
     noise: Option<NoiseFile>,
     use_sonar: Option<bool>,
+    method: Option<String>,
 }

@@ -40,6 +40,7 @@
 //! tolerance_m = 0.15                    # a goal is reached within this
 //! wall_distance_m = 0.45                # explore: the wall kept on the right this far
 //! use_sonar = true                      # hear the ring's echoes too (when [sonar] fires it)
+//! method = "histogram"                  # or "direct": the baseline with no way round
 //!
 //! [localisation]                        # optional: chain the scans into a map while running
 //! matcher = "lorentz"                   # ls, lorentz, lorentz-lines or mbicp
@@ -281,6 +282,11 @@ impl Scenario {
             _ => None,
         };
         tour.navigation = navigation(&robot, sonar.as_ref(), file.navigation.as_ref());
+        if let Some(method) = file.navigation.as_ref().and_then(|n| n.method.as_ref()) {
+            tour.navigation.method = method.get_ref().parse().map_err(|e: String| {
+                source.error(method.span(), Some("navigation.method".into()), e)
+            })?;
+        }
         let pan_tilt = match (&robot.pan_tilt, &file.pan_tilt) {
             (None, None) => None,
             (None, Some(_)) => {
@@ -460,6 +466,7 @@ struct NavigationFile {
     tolerance_m: Option<Positive>,
     wall_distance_m: Option<Positive>,
     use_sonar: Option<bool>,
+    method: Option<Spanned<String>>,
 }
 
 /// How the robot's `goto` and `explore` steps drive: its footprint, its laser's mount, the ring

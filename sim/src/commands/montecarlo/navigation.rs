@@ -609,10 +609,18 @@ fn trajectories_svg(
         ),
     );
     let columns = 2;
-    let column_width = layers.column_width(300.0);
+    // Room for the longest label at 8 pixels a character (the legend's own estimate is 7).
+    let longest = study
+        .conditions
+        .iter()
+        .map(|c| c.name.chars().count() + "true paths: ".len())
+        .max()
+        .unwrap_or(0);
+    let column_width = layers.column_width(300.0).max(36.0 + 8.0 * longest as f64);
     let legend_top = plan.origin[1] + plan.height() + Plan::BELOW + 10.0;
     let rows_n = layers.rows(columns) as f64;
-    let width = (plan.origin[0] + plan.width() + 20.0).max(column_width * columns as f64 + 40.0);
+    let width = (plan.origin[0] + plan.width() + 20.0)
+        .max(plan.origin[0] + column_width * columns as f64 + 20.0);
     let height = legend_top + rows_n * 18.0 + 40.0;
     let mut svg = open_svg(width, height, 13);
     let _ = writeln!(
