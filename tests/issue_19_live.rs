@@ -39,10 +39,7 @@ fn json(message: Message) -> serde_json::Value {
 fn a_client_subscribes_to_the_scans_and_decodes_every_one() {
     let scenario = scenario("lab-tour");
     let speed = 400.0;
-    let live = Live {
-        server: Arc::new(LiveServer::start("127.0.0.1:0").unwrap()),
-        speed,
-    };
+    let live = Live::new(Arc::new(LiveServer::start("127.0.0.1:0").unwrap()), speed);
     live.announce(&scenario);
     let mut ws = connect(live.server.addr());
     let info = json(ws.read().unwrap());
@@ -55,7 +52,15 @@ fn a_client_subscribes_to_the_scans_and_decodes_every_one() {
         .iter()
         .map(|c| (c["topic"].as_str().unwrap().to_string(), c))
         .collect();
-    for topic in ["/scan", "/odom", "/tf", "/tf_static", "/clock", "/estimate"] {
+    for topic in [
+        "/scan",
+        "/odom",
+        "/tf",
+        "/tf_static",
+        "/clock",
+        "/estimate",
+        "/ground_truth",
+    ] {
         let c = channels
             .get(topic)
             .unwrap_or_else(|| panic!("{topic}: {advertise}"));
@@ -67,11 +72,12 @@ fn a_client_subscribes_to_the_scans_and_decodes_every_one() {
         serde_json::json!({"op": "subscribe", "subscriptions": [
             {"id": 10, "channelId": channels["/scan"]["id"]},
             {"id": 11, "channelId": channels["/tf_static"]["id"]},
+            {"id": 12, "channelId": channels["/ground_truth"]["id"]},
         ]})
         .to_string(),
     ))
     .unwrap();
-    while live.server.subscriptions() < 2 {
+    while live.server.subscriptions() < 3 {
         std::thread::sleep(Duration::from_millis(2));
     }
 
@@ -82,6 +88,7 @@ fn a_client_subscribes_to_the_scans_and_decodes_every_one() {
     let started = Instant::now();
     let run = std::thread::spawn(move || run_scenario(&scenario, &options, |_, _| {}).unwrap());
     let mut scans = Vec::new();
+    let mut truths = Vec::new();
     let mut statics = 0;
     let record = loop {
         match ws.read() {
@@ -100,11 +107,27 @@ fn a_client_subscribes_to_the_scans_and_decodes_every_one() {
                         assert!(tf.0.iter().any(|t| t.child_frame_id == "laser"));
                         statics += 1;
                     }
+                    12 => {
+                        let pose = CdrReader::new(&frame[13..])
+                            .unwrap()
+                            .pose_stamped()
+                            .unwrap();
+                        assert_eq!(pose.header.stamp.0, at);
+                        truths.push(pose);
+                    }
                     other => panic!("subscription {other} was never made"),
                 }
             }
             Ok(_) => {}
-            Err(e) => panic!("the connection failed before the run ended: {e}"),
+            Err(e) => panic!(
+                "the connection failed before the run ended ({} scans read, the run {}): {e}",
+                scans.len(),
+                if run.is_finished() {
+                    "finished"
+                } else {
+                    "still going"
+                }
+            ),
         }
         if run.is_finished() && scans.len() >= 46 {
             break run.join().unwrap();
@@ -115,10 +138,13 @@ fn a_client_subscribes_to_the_scans_and_decodes_every_one() {
     let server = Arc::try_unwrap(live.server).expect("the run let go of the server");
     let closing = std::thread::spawn(move || server.stop());
     while let Ok(message) = ws.read() {
-        if let Message::Binary(frame) = message
-            && u32::from_le_bytes(frame[1..5].try_into().unwrap()) == 10
-        {
-            scans.push(CdrReader::new(&frame[13..]).unwrap().laser_scan().unwrap());
+        if let Message::Binary(frame) = message {
+            let reader = CdrReader::new(&frame[13..]).unwrap();
+            match u32::from_le_bytes(frame[1..5].try_into().unwrap()) {
+                10 => scans.push(reader.laser_scan().unwrap()),
+                12 => truths.push(reader.pose_stamped().unwrap()),
+                _ => {}
+            }
         }
     }
     closing.join().unwrap();
@@ -142,6 +168,22 @@ fn a_client_subscribes_to_the_scans_and_decodes_every_one() {
                 assert_eq!(*r, (f64::from(mm) * 1e-3) as f32);
             }
         }
+    }
+    // The twin's truth at every scan, as the run recorded it (issue 19: it was left out).
+    assert_eq!(
+        truths.len(),
+        record.scans.len(),
+        "one /ground_truth per scan"
+    );
+    for (got, want) in truths.iter().zip(&record.scans) {
+        assert_eq!(got.header.stamp, want.scan.stamp);
+        assert_eq!(got.header.frame_id, "map");
+        let (x, y) = (got.pose.translation[0], got.pose.translation[1]);
+        assert!(
+            (x - want.truth.x).abs() < 1e-9 && (y - want.truth.y).abs() < 1e-9,
+            "truth ({x}, {y}) against {:?}",
+            want.truth
+        );
     }
     // Paced: the run waited for the wall clock to reach each scan's stamp / speed.
     let last = record.scans.last().unwrap().scan.stamp.secs_f64();

@@ -134,11 +134,24 @@ impl Exchange {
     }
 }
 
+/// What watches a tape as it is written: called with the backend and each exchange.
+pub type Hook<R> = Box<dyn FnMut(&R, &Exchange) + Send>;
+
 /// A backend whose calls are noted on a tape.
-#[derive(Debug)]
 pub struct Taped<R> {
     inner: R,
     tape: Vec<Exchange>,
+    hook: Option<Hook<R>>,
+}
+
+impl<R: core::fmt::Debug> core::fmt::Debug for Taped<R> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Taped")
+            .field("inner", &self.inner)
+            .field("tape", &self.tape.len())
+            .field("hook", &self.hook.is_some())
+            .finish()
+    }
 }
 
 impl<R: Hardware> Taped<R> {
@@ -147,7 +160,16 @@ impl<R: Hardware> Taped<R> {
         Taped {
             inner,
             tape: Vec::new(),
+            hook: None,
         }
+    }
+
+    /// The same, with `hook` called with the backend and each exchange as it is noted: how a
+    /// caller learns, beside the contract, what the backend alone knows at that moment (the
+    /// twin's truth when a scan comes back).
+    pub fn with_hook(mut self, hook: impl FnMut(&R, &Exchange) + Send + 'static) -> Self {
+        self.hook = Some(Box::new(hook));
+        self
     }
 
     /// The backend.
@@ -183,7 +205,11 @@ impl<R: Hardware> Taped<R> {
                 message: e.to_string(),
             },
         };
-        self.tape.push(Exchange { call, answer });
+        let exchange = Exchange { call, answer };
+        if let Some(hook) = &mut self.hook {
+            hook(&self.inner, &exchange);
+        }
+        self.tape.push(exchange);
         result
     }
 }

@@ -63,6 +63,20 @@ pub struct Live {
     pub server: std::sync::Arc<super::live::LiveServer>,
     /// Simulated seconds per wall-clock second.
     pub speed: f64,
+    /// The twin's true pose at each scan's stamp, noted by the run as the scan comes back
+    /// (the tour holds the robot meanwhile) and taken when the scan is published.
+    pub truths: std::sync::Arc<std::sync::Mutex<std::collections::BTreeMap<Stamp, robot::Pose2>>>,
+}
+
+impl Live {
+    /// Publishes on `server` at `speed` × real time.
+    pub fn new(server: std::sync::Arc<super::live::LiveServer>, speed: f64) -> Self {
+        Live {
+            server,
+            speed,
+            truths: Default::default(),
+        }
+    }
 }
 
 impl std::fmt::Debug for Live {
@@ -88,10 +102,17 @@ impl Live {
         if let Some(wait) = due.checked_sub(started.elapsed()) {
             std::thread::sleep(wait);
         }
+        let truth = {
+            let mut truths = self.truths.lock().unwrap_or_else(|e| e.into_inner());
+            let truth = truths.get(&scan.stamp).copied();
+            // Scans come in order: what is older is of no more use.
+            *truths = truths.split_off(&scan.stamp);
+            truth
+        };
         let recorded = RecordedScan {
             scan,
             odometry,
-            truth: None,
+            truth,
         };
         let scan_time = crate::output::scan_period_s(&scenario.robot.laser);
         for (topic, msg) in scan_topics(&recorded, &scenario.robot.mount(), scan_time) {
@@ -115,10 +136,11 @@ impl Live {
         self.server.publish("/tf_static", Stamp::ZERO, &statics);
         let estimate = Encoded::of(&estimate_msg(Stamp::ZERO, robot::Pose2::IDENTITY));
         let empty = crate::output::no_scan();
+        // `twin run --live` runs the twin: its truth is published too.
         let example = crate::output::RecordedScan {
             scan: &empty,
             odometry: robot::Pose2::IDENTITY,
-            truth: None,
+            truth: Some(robot::Pose2::IDENTITY),
         };
         for (topic, msg) in crate::output::scan_topics(&example, &scenario.robot.mount(), 0.0) {
             self.server.advertise(topic, &msg);
@@ -317,6 +339,21 @@ pub fn run_scenario(
         scenario.seed = seed;
     }
     let mut taped = Taped::new(SimRobot::from_scenario(&scenario)?);
+    if let Some(live) = &options.live {
+        // The truth at each scan, noted as the scan comes back, for the live view.
+        let truths = std::sync::Arc::clone(&live.truths);
+        taped = taped.with_hook(move |twin: &SimRobot, exchange| {
+            if let robot::replay::Answer::Scan { scan: Some(scan) } = &exchange.answer {
+                let truth = twin
+                    .true_pose_at(scan.stamp)
+                    .unwrap_or_else(|| twin.true_pose());
+                truths
+                    .lock()
+                    .unwrap_or_else(|e| e.into_inner())
+                    .insert(scan.stamp, truth);
+            }
+        });
+    }
     let controlled = control(
         &mut taped,
         &scenario,
@@ -562,10 +599,7 @@ pub fn main(args: RunArgs) -> Result<(), super::CommandError> {
                 server.addr(),
                 args.speed
             );
-            Some(Live {
-                server: std::sync::Arc::new(server),
-                speed: args.speed,
-            })
+            Some(Live::new(std::sync::Arc::new(server), args.speed))
         }
         None => None,
     };
