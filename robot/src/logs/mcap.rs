@@ -6,9 +6,10 @@
 //! odometry from `nav_msgs/Odometry` or, when the bag has none, from `/tf`'s `odom` → base
 //! transforms, and the laser's mount on the base from `/tf_static` (the chain of static
 //! transforms from the base to the scan's frame; identity when there is none, as for a CARMEN
-//! log that does not say). Chunks must be uncompressed: this build leaves out the zstd and lz4
-//! codecs (`ros2 bag record` writes uncompressed MCAP unless asked), and a compressed file is
-//! refused by name.
+//! log that does not say). Chunks may be compressed with zstd or lz4 (as `ros2 bag record
+//! --compression-mode` and Foxglove write them): they are decoded by Rust decoders (`ruzstd`,
+//! `lz4_flex`) into a plain copy in memory, which the mcap crate then reads — its own codecs are
+//! C libraries this build leaves out. The twin writes uncompressed files.
 
 use super::{LogError, LogEvent, LogFormat, RecordedLog};
 use crate::geometry::Pose2;
@@ -138,8 +139,120 @@ fn malformed(file: &str, message: String) -> LogError {
     }
 }
 
+/// `bytes` with every compressed chunk decoded: the file itself when none is compressed, else a
+/// plain copy (the same schemas, channels and messages, uncompressed chunks). A chunk in another
+/// compression, one that does not decode, or one whose size is not what its header says, is an
+/// error naming the file and the chunk.
+pub fn plain<'a>(bytes: &'a [u8], file: &str) -> Result<std::borrow::Cow<'a, [u8]>, LogError> {
+    use mcap::records::Record;
+    use std::collections::BTreeSet;
+    let bad = |what: String| malformed(file, what);
+    let records =
+        || mcap::read::LinearReader::new(bytes).map_err(|e| bad(format!("not an MCAP file ({e})")));
+    // Plain and whole: read as it is. (The reader yields its error again and again once it
+    // has one: stop at the first; the copy below names it.)
+    let plain_and_whole = records()?
+        .find_map(|r| match r {
+            Ok(Record::Chunk { header, .. }) if !header.compression.is_empty() => Some(false),
+            Ok(_) => None,
+            Err(_) => Some(false),
+        })
+        .unwrap_or(true);
+    if plain_and_whole {
+        return Ok(std::borrow::Cow::Borrowed(bytes));
+    }
+    let failed = |e: mcap::McapError| bad(format!("cannot copy it uncompressed: {e}"));
+    let mut writer = mcap::WriteOptions::new()
+        .compression(None)
+        .profile("ros2")
+        .library("robot-twin")
+        .create(std::io::Cursor::new(Vec::new()))
+        .map_err(failed)?;
+    let (mut schemas, mut channels) = (BTreeSet::new(), BTreeSet::new());
+    let mut copy = |record: Record<'_>| -> Result<(), LogError> {
+        match record {
+            Record::Schema { header, data } if schemas.insert(header.id) => {
+                writer
+                    .add_schema_with_id(header.id, &header.name, &header.encoding, &data)
+                    .map_err(failed)?;
+            }
+            Record::Channel(c) if channels.insert(c.id) => {
+                writer
+                    .add_channel_with_id(
+                        c.id,
+                        c.schema_id,
+                        &c.topic,
+                        &c.message_encoding,
+                        &c.metadata,
+                    )
+                    .map_err(failed)?;
+            }
+            Record::Message { header, data } => {
+                writer
+                    .write_to_known_channel(&header, &data)
+                    .map_err(failed)?;
+            }
+            _ => {}
+        }
+        Ok(())
+    };
+    for (n, record) in records()?.enumerate() {
+        let record = record.map_err(|e| {
+            bad(format!(
+                "cannot read record {} (is the file cut short?): {e}",
+                n + 1
+            ))
+        })?;
+        let Record::Chunk { header, data } = record else {
+            copy(record)?;
+            continue;
+        };
+        let chunk = |what: String| bad(format!("chunk at record {}: {what}", n + 1));
+        let raw = decompress(&header.compression, &data).map_err(chunk)?;
+        if raw.len() as u64 != header.uncompressed_size {
+            return Err(chunk(format!(
+                "{} bytes once decoded, its header says {}",
+                raw.len(),
+                header.uncompressed_size
+            )));
+        }
+        for inner in mcap::read::LinearReader::sans_magic(&raw) {
+            copy(inner.map_err(|e| chunk(e.to_string()))?)?;
+        }
+    }
+    writer.finish().map_err(failed)?;
+    Ok(std::borrow::Cow::Owned(writer.into_inner().into_inner()))
+}
+
+/// A chunk's records decoded from `compression` (`zstd`, `lz4` or none).
+fn decompress(compression: &str, data: &[u8]) -> Result<Vec<u8>, String> {
+    use std::io::Read;
+    let mut out = Vec::new();
+    match compression {
+        "" => out.extend_from_slice(data),
+        "zstd" => {
+            let mut decoder =
+                ruzstd::decoding::StreamingDecoder::new(data).map_err(|e| format!("zstd: {e}"))?;
+            decoder
+                .read_to_end(&mut out)
+                .map_err(|e| format!("zstd: {e}"))?;
+        }
+        "lz4" => {
+            lz4_flex::frame::FrameDecoder::new(data)
+                .read_to_end(&mut out)
+                .map_err(|e| format!("lz4: {e}"))?;
+        }
+        other => {
+            return Err(format!(
+                "compressed with {other:?}: expected \"zstd\", \"lz4\" or none"
+            ));
+        }
+    }
+    Ok(out)
+}
+
 /// The messages of an MCAP file in file order, numbered from 0; one that cannot be read is an
-/// error naming the file and the message.
+/// error naming the file and the message. `bytes` must be [`plain`].
 fn messages<'a>(
     bytes: &'a [u8],
     file: &'a str,
@@ -159,6 +272,7 @@ const BASE_FRAMES: [&str; 2] = ["base_link", "base_footprint"];
 
 /// Reads an MCAP file of ROS 2 messages (see the module's documentation).
 pub fn read_mcap(bytes: &[u8], file: &str) -> Result<RecordedLog, LogError> {
+    let bytes = &*plain(bytes, file)?;
     let malformed = |what: String| malformed(file, what);
     let mut log = RecordedLog::new(LogFormat::Mcap);
     let mut scan_topic: Option<String> = None;
@@ -282,6 +396,7 @@ pub const TAPE_TOPIC: &str = "/hardware/tape";
 
 /// The contract exchanges recorded in an MCAP file ([`TAPE_TOPIC`]), in order.
 pub fn read_tape(bytes: &[u8], file: &str) -> Result<Vec<crate::replay::Exchange>, LogError> {
+    let bytes = &*plain(bytes, file)?;
     let malformed = |what: String| malformed(file, what);
     let mut tape = Vec::new();
     for (n, message) in messages(bytes, file)? {
