@@ -138,7 +138,7 @@ impl Shard {
 
     /// This shard's trials of `0..total`, in order, computed as they are asked for (a study
     /// of 10⁹ trials costs no memory).
-    pub fn trials(&self, total: u64) -> impl Iterator<Item = u64> + Clone {
+    pub fn trials(self, total: u64) -> impl Iterator<Item = u64> + Clone {
         (self.index..total).step_by(self.count.max(1) as usize)
     }
 
@@ -439,9 +439,9 @@ impl Default for RunOptions {
     }
 }
 
-/// What a run did.
+/// What a run did (`S`: what its finished results are summarised by).
 #[derive(Clone, Debug)]
-pub struct RunReport {
+pub struct RunReport<S = Summary> {
     /// Trials of this shard.
     pub owned: u64,
     /// Trials found done in DIR before the run.
@@ -451,7 +451,7 @@ pub struct RunReport {
     /// Wall-clock seconds of the trials run now.
     pub wall_seconds: f64,
     /// The summary, once every trial of the shard is done.
-    pub summary: Option<Summary>,
+    pub summary: Option<S>,
     /// The files written, once done.
     pub files: Vec<PathBuf>,
 }
@@ -472,19 +472,8 @@ pub fn run_study(
     let mut log = Log::open(&progress_dir, study)?;
     let done = log.done.clone();
     let shard = options.shard;
-    let total = study.total_trials();
-    // The shard's trials are never listed: memory follows the trials run, not the study's size.
-    let owned = shard.count_of(total);
-    let resumed = done.iter().filter(|&&i| i < total && shard.owns(i)).count() as u64;
-    let mut missing = shard
-        .trials(total)
-        .filter(|i| !done.contains(i))
-        .take(options.max_trials.map_or(usize::MAX, |m| m as usize))
-        .peekable();
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(options.threads)
-        .build()
-        .map_err(|e| StudyError::Threads(e.to_string()))?;
+    let (owned, resumed, missing, pool) = plan(options, study.total_trials(), &done)?;
+    let mut missing = missing.peekable();
     let trials = Trials::new(study);
     let chunk = CHUNK_PER_THREAD * pool.current_num_threads();
     let started = Instant::now();
@@ -516,6 +505,28 @@ pub fn run_study(
         report.files = files;
     }
     Ok(report)
+}
+
+/// A shard's plan: the trials of `0..total` it owns, how many of them `done` holds, those
+/// missing (at most `max_trials`), and a pool of the options' threads. The trials are never
+/// listed: memory follows the trials run, not the study's size.
+fn plan<'a>(
+    options: &RunOptions,
+    total: u64,
+    done: &'a BTreeSet<u64>,
+) -> Result<(u64, u64, impl Iterator<Item = u64> + 'a, rayon::ThreadPool), StudyError> {
+    let shard = options.shard;
+    let owned = shard.count_of(total);
+    let resumed = done.iter().filter(|&&i| i < total && shard.owns(i)).count() as u64;
+    let missing = shard
+        .trials(total)
+        .filter(move |i| !done.contains(i))
+        .take(options.max_trials.map_or(usize::MAX, |m| m as usize));
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(options.threads)
+        .build()
+        .map_err(|e| StudyError::Threads(e.to_string()))?;
+    Ok((owned, resumed, missing, pool))
 }
 
 /// Records which study (and shard) `dir` holds, or checks it is the same.
@@ -778,70 +789,15 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(Summary, Vec<PathBuf>), St
         .ok_or_else(|| StudyError::Merge("name at least one shard folder".into()))?;
     let study_path = first.join("study.toml");
     let text = std::fs::read_to_string(&study_path).map_err(io_error(&study_path))?;
-    // The study is re-read from its original place for the world and robot files.
-    let mut shards = BTreeSet::new();
-    let mut count = None;
     let mut rows: BTreeMap<u64, Vec<String>> = BTreeMap::new();
     let mut timings: BTreeMap<u64, Vec<String>> = BTreeMap::new();
-    for dir in dirs {
-        let path = dir.join("study.toml");
-        let other = std::fs::read_to_string(&path).map_err(io_error(&path))?;
-        if other != text {
-            return Err(StudyError::Merge(format!(
-                "{} holds another study than {}",
-                dir.display(),
-                first.display()
-            )));
-        }
-        let path = dir.join("shard");
-        let shard: Shard = std::fs::read_to_string(&path)
-            .map_err(io_error(&path))?
-            .trim()
-            .parse()
-            .map_err(StudyError::Merge)?;
-        if *count.get_or_insert(shard.count) != shard.count {
-            return Err(StudyError::Merge(format!(
-                "{} is shard {shard}, the others are of {}",
-                dir.display(),
-                count.unwrap_or(0)
-            )));
-        }
-        if !shards.insert(shard.index) {
-            return Err(StudyError::Merge(format!("shard {shard} is given twice")));
-        }
-        let path = dir.join("trials.csv");
-        let lines = read_lines(&path)?;
-        if lines.first().map(String::as_str) != Some(TRIALS_HEADER) {
-            return Err(StudyError::Merge(format!(
-                "{} is missing or not finished (run the shard to its end first)",
-                path.display()
-            )));
-        }
-        for line in lines.into_iter().skip(1) {
-            let index = trial_of(&line);
-            if !shard.owns(index) {
-                return Err(StudyError::Merge(format!(
-                    "{} has trial {index}, which is not shard {shard}'s",
-                    path.display()
-                )));
-            }
-            rows.entry(index).or_default().push(line);
+    for (dir, lines) in read_shards(dirs, &text, "trials.csv", TRIALS_HEADER)? {
+        for line in lines {
+            rows.entry(trial_of(&line)).or_default().push(line);
         }
         for line in read_lines(&dir.join("timings.csv"))?.into_iter().skip(1) {
-            let index = trial_of(&line);
-            timings.entry(index).or_default().push(line);
+            timings.entry(trial_of(&line)).or_default().push(line);
         }
-    }
-    let count = count.unwrap_or(1);
-    if shards.len() as u64 != count {
-        let missing: Vec<String> = (0..count)
-            .filter(|k| !shards.contains(k))
-            .map(|k| format!("{k}/{count}"))
-            .collect();
-        return Err(StudyError::Merge(format!(
-            "shards missing: {}",
-            missing.join(", ")
-        )));
     }
     // The copy's relative paths (world, robot) resolve from the study's own folder: load the
     // study from where the shards' run recorded it, and check it is still the same text.
@@ -870,6 +826,79 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(Summary, Vec<PathBuf>), St
         )));
     }
     write_results(&study, out, rows, timings)
+}
+
+/// The finished shard folders `dirs` of the study whose text is `text`: each folder with the
+/// rows of its `results` file (after the `header`). Refuses a folder of another study, shards of
+/// different counts, a shard given twice, an unfinished shard and a row of another shard's
+/// trial, and names the shards missing.
+fn read_shards(
+    dirs: &[PathBuf],
+    text: &str,
+    results: &str,
+    header: &str,
+) -> Result<Vec<(PathBuf, Vec<String>)>, StudyError> {
+    let first = dirs
+        .first()
+        .ok_or_else(|| StudyError::Merge("name at least one shard folder".into()))?;
+    let mut shards = BTreeSet::new();
+    let mut count = None;
+    let mut found = Vec::new();
+    for dir in dirs {
+        let path = dir.join("study.toml");
+        let other = std::fs::read_to_string(&path).map_err(io_error(&path))?;
+        if other != text {
+            return Err(StudyError::Merge(format!(
+                "{} holds another study than {}",
+                dir.display(),
+                first.display()
+            )));
+        }
+        let path = dir.join("shard");
+        let shard: Shard = std::fs::read_to_string(&path)
+            .map_err(io_error(&path))?
+            .trim()
+            .parse()
+            .map_err(StudyError::Merge)?;
+        if *count.get_or_insert(shard.count) != shard.count {
+            return Err(StudyError::Merge(format!(
+                "{} is shard {shard}, the others are of {}",
+                dir.display(),
+                count.unwrap_or(0)
+            )));
+        }
+        if !shards.insert(shard.index) {
+            return Err(StudyError::Merge(format!("shard {shard} is given twice")));
+        }
+        let path = dir.join(results);
+        let mut lines = read_lines(&path)?;
+        if lines.first().map(String::as_str) != Some(header) {
+            return Err(StudyError::Merge(format!(
+                "{} is missing or not finished (run the shard to its end first)",
+                path.display()
+            )));
+        }
+        lines.remove(0);
+        if let Some(index) = lines.iter().map(|l| trial_of(l)).find(|&i| !shard.owns(i)) {
+            return Err(StudyError::Merge(format!(
+                "{} has trial {index}, which is not shard {shard}'s",
+                path.display()
+            )));
+        }
+        found.push((dir.clone(), lines));
+    }
+    let count = count.unwrap_or(1);
+    if shards.len() as u64 != count {
+        let missing: Vec<String> = (0..count)
+            .filter(|k| !shards.contains(k))
+            .map(|k| format!("{k}/{count}"))
+            .collect();
+        return Err(StudyError::Merge(format!(
+            "shards missing: {}",
+            missing.join(", ")
+        )));
+    }
+    Ok(found)
 }
 
 /// The count a study's text gives `key` (`key = N  # comment`), if it gives one.
@@ -982,28 +1011,55 @@ pub fn main(args: MontecarloArgs) -> Result<(), super::CommandError> {
         study = study.with_trials_per_rate(trials);
     }
     // A smaller study gets a folder of its own: it never meets the full study's trials.
-    let dir = args.out.unwrap_or_else(|| match args.trials {
+    let dir = args.out.clone().unwrap_or_else(|| match args.trials {
         Some(n) => PathBuf::from("out").join(format!("montecarlo-{}-{n}-per-rate", study.name)),
         None => default_dir(&study),
     });
+    let run = |options: &RunOptions, progress: &mut dyn FnMut(u64, u64)| {
+        run_study(&study, &dir, options, progress)
+    };
+    let Some(report) = run_shown(&args, &study.name, study.total_trials(), &dir, run)? else {
+        return Ok(());
+    };
+    let rate = report.ran as f64 / report.wall_seconds.max(1e-9);
+    say!(
+        "{} trials run in {:.1} s ({rate:.0} trials/s, {} matchers each)",
+        report.ran,
+        report.wall_seconds,
+        study.matchers.len()
+    );
+    let table = report.summary.as_ref().map(Summary::table);
+    say_finished(table, &report, &dir, args.shard);
+    Ok(())
+}
+
+/// Runs a study's shard with a progress bar; `None` when `--quiet` (nothing more to say), else
+/// the report, after saying how many trials were found done.
+fn run_shown<S>(
+    args: &MontecarloArgs,
+    name: &str,
+    total: u64,
+    dir: &Path,
+    run: impl FnOnce(&RunOptions, &mut dyn FnMut(u64, u64)) -> Result<RunReport<S>, StudyError>,
+) -> Result<Option<RunReport<S>>, super::CommandError> {
     let bar = super::bar(
         args.quiet,
-        args.shard.count_of(study.total_trials()),
+        args.shard.count_of(total),
         "{prefix} [{bar:30}] {pos}/{len} trials {rate} ETA {eta}",
     );
-    bar.set_prefix(format!("{} (shard {})", study.name, args.shard));
+    bar.set_prefix(format!("{name} (shard {})", args.shard));
     let options = RunOptions {
         threads: args.threads,
         shard: args.shard,
         max_trials: args.max_trials,
     };
-    let report = run_study(&study, &dir, &options, |done, total| {
+    let report = run(&options, &mut |done, total| {
         bar.set_length(total);
         bar.set_position(done);
     })?;
     bar.finish_and_clear();
     if args.quiet {
-        return Ok(());
+        return Ok(None);
     }
     if report.resumed > 0 {
         say!(
@@ -1012,29 +1068,25 @@ pub fn main(args: MontecarloArgs) -> Result<(), super::CommandError> {
             dir.display()
         );
     }
-    let rate = report.ran as f64 / report.wall_seconds.max(1e-9);
-    say!(
-        "{} trials run in {:.1} s ({rate:.0} trials/s, {} matchers each)",
-        report.ran,
-        report.wall_seconds,
-        study.matchers.len()
-    );
-    match &report.summary {
-        Some(summary) => {
-            say!("{}", summary.table().trim_end_matches('\n'));
+    Ok(Some(report))
+}
+
+/// Prints a finished run's table and files, or how far an unfinished one got.
+fn say_finished<S>(table: Option<String>, report: &RunReport<S>, dir: &Path, shard: Shard) {
+    match table {
+        Some(table) => {
+            say!("{}", table.trim_end_matches('\n'));
             say!("wrote {}", dir.display());
             for f in &report.files {
                 say!("  {}", f.display());
             }
         }
         None => say!(
-            "{} of {} trials of shard {} done; run the same command again to go on",
+            "{} of {} trials of shard {shard} done; run the same command again to go on",
             report.resumed + report.ran,
             report.owned,
-            args.shard
         ),
     }
-    Ok(())
 }
 
 /// `twin montecarlo` on a navigation study (a file that names a scenario).
@@ -1049,51 +1101,17 @@ fn navigation_main(path: &Path, args: &MontecarloArgs) -> Result<(), super::Comm
         }
         None => PathBuf::from("out").join(format!("montecarlo-{}", study.name)),
     });
-    let bar = super::bar(
-        args.quiet,
-        args.shard.count_of(study.total_trials()),
-        "{prefix} [{bar:30}] {pos}/{len} runs {rate} ETA {eta}",
-    );
-    bar.set_prefix(format!("{} (shard {})", study.name, args.shard));
-    let options = RunOptions {
-        threads: args.threads,
-        shard: args.shard,
-        max_trials: args.max_trials,
+    let run = |options: &RunOptions, progress: &mut dyn FnMut(u64, u64)| {
+        navigation::run_study(&study, &dir, options, progress)
     };
-    let report = navigation::run_study(&study, &dir, &options, |done, total| {
-        bar.set_length(total);
-        bar.set_position(done);
-    })?;
-    bar.finish_and_clear();
-    if args.quiet {
+    let Some(report) = run_shown(args, &study.name, study.total_trials(), &dir, run)? else {
         return Ok(());
-    }
-    if report.resumed > 0 {
-        say!(
-            "resumed: {} trials were already done in {}",
-            report.resumed,
-            dir.display()
-        );
-    }
+    };
     say!(
         "{} closed-loop runs in {:.1} s",
         report.ran,
         report.wall_seconds
     );
-    match &report.table {
-        Some(table) => {
-            say!("{}", table.trim_end_matches('\n'));
-            say!("wrote {}", dir.display());
-            for f in &report.files {
-                say!("  {}", f.display());
-            }
-        }
-        None => say!(
-            "{} of {} trials of shard {} done; run the same command again to go on",
-            report.resumed + report.ran,
-            report.owned,
-            args.shard
-        ),
-    }
+    say_finished(report.summary.clone(), &report, &dir, args.shard);
     Ok(())
 }

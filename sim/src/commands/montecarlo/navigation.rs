@@ -11,7 +11,7 @@
 //! the study's `success_m` of it.
 
 use super::{
-    RunOptions, Shard, StudyError, claim, io_error, read_lines, sealed, trial_of, verified,
+    RunOptions, StudyError, claim, io_error, read_lines, read_shards, sealed, trial_of, verified,
     write_atomically,
 };
 use crate::commands::run::{RunOptions as ScenarioOptions, run_scenario};
@@ -140,22 +140,8 @@ fn draw_start(study: &NavStudy, map: &WorldMap, rng: &mut SimRng) -> Option<Pose
     None
 }
 
-/// What a navigation run did.
-#[derive(Clone, Debug)]
-pub struct NavReport {
-    /// Trials of this shard.
-    pub owned: u64,
-    /// Trials found done before the run.
-    pub resumed: u64,
-    /// Trials run now.
-    pub ran: u64,
-    /// Wall-clock seconds of the trials run now.
-    pub wall_seconds: f64,
-    /// The table, once every trial of the shard is done.
-    pub table: Option<String>,
-    /// The files written, once done.
-    pub files: Vec<PathBuf>,
-}
+/// What a navigation run did: its summary is the table.
+pub type NavReport = super::RunReport<String>;
 
 /// Runs (or resumes) `study` into `dir`. `progress(done, total)` is called as trials finish.
 pub fn run_study(
@@ -170,17 +156,8 @@ pub fn run_study(
     let total = study.total_trials();
     let (mut log, done) = NavLog::open(&progress_dir, total)?;
     let shard = options.shard;
-    let owned = shard.count_of(total);
-    let resumed = done.iter().filter(|&&i| shard.owns(i)).count() as u64;
-    let mut missing = shard
-        .trials(total)
-        .filter(|i| !done.contains(i))
-        .take(options.max_trials.map_or(usize::MAX, |m| m as usize))
-        .peekable();
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(options.threads)
-        .build()
-        .map_err(|e| StudyError::Threads(e.to_string()))?;
+    let (owned, resumed, missing, pool) = super::plan(options, total, &done)?;
+    let mut missing = missing.peekable();
     let map = WorldMap::new(&study.conditions[0].scenario.world);
     let chunk = 2 * pool.current_num_threads();
     let started = Instant::now();
@@ -205,7 +182,7 @@ pub fn run_study(
         resumed,
         ran,
         wall_seconds: started.elapsed().as_secs_f64(),
-        table: None,
+        summary: None,
         files: Vec::new(),
     };
     if finished == owned {
@@ -214,7 +191,7 @@ pub fn run_study(
             .filter(|(i, _)| shard.owns(*i))
             .collect();
         let (table, files) = write_results(study, dir, &rows)?;
-        report.table = Some(table);
+        report.summary = Some(table);
         report.files = files;
     }
     Ok(report)
@@ -660,71 +637,20 @@ pub fn merge(
             origin.trim()
         )));
     }
-    let mut shards = BTreeSet::new();
-    let mut count = None;
     let mut trials = BTreeMap::new();
-    for dir in dirs {
-        let path = dir.join("study.toml");
-        if std::fs::read_to_string(&path).map_err(io_error(&path))? != text {
-            return Err(StudyError::Merge(format!(
-                "{} holds another study than {}",
-                dir.display(),
-                first.display()
-            )));
-        }
-        let path = dir.join("shard");
-        let shard: Shard = std::fs::read_to_string(&path)
-            .map_err(io_error(&path))?
-            .trim()
-            .parse()
-            .map_err(StudyError::Merge)?;
-        if *count.get_or_insert(shard.count) != shard.count {
-            return Err(StudyError::Merge(format!(
-                "{} is shard {shard}, the others are of {}",
-                dir.display(),
-                count.unwrap_or(0)
-            )));
-        }
-        if !shards.insert(shard.index) {
-            return Err(StudyError::Merge(format!("shard {shard} is given twice")));
-        }
-        let rows_path = dir.join("trials.csv");
-        let rows = read_lines(&rows_path)?;
-        if rows.first().map(String::as_str) != Some(HEADER) {
-            return Err(StudyError::Merge(format!(
-                "{} is missing or not finished (run the shard to its end first)",
-                rows_path.display()
-            )));
-        }
+    for (dir, rows) in read_shards(dirs, text, "trials.csv", HEADER)? {
         let mut paths: BTreeMap<u64, String> = read_lines(&dir.join("paths.csv"))?
             .into_iter()
             .skip(1)
             .map(|l| (trial_of(&l), l))
             .collect();
-        for row in rows.into_iter().skip(1) {
+        for row in rows {
             let index = trial_of(&row);
-            if !shard.owns(index) {
-                return Err(StudyError::Merge(format!(
-                    "{} has trial {index}, which is not shard {shard}'s",
-                    rows_path.display()
-                )));
-            }
             let path = paths.remove(&index).ok_or_else(|| {
                 StudyError::Merge(format!("{}: no path for trial {index}", dir.display()))
             })?;
             trials.insert(index, (row, path));
         }
-    }
-    let count = count.unwrap_or(1);
-    if shards.len() as u64 != count {
-        let missing: Vec<String> = (0..count)
-            .filter(|k| !shards.contains(k))
-            .map(|k| format!("{k}/{count}"))
-            .collect();
-        return Err(StudyError::Merge(format!(
-            "shards missing: {}",
-            missing.join(", ")
-        )));
     }
     if trials.len() as u64 != study.total_trials() {
         return Err(StudyError::Merge(format!(
