@@ -65,7 +65,7 @@ pub struct NavConfig {
     pub patience: usize,
     /// Progress that resets the patience, metres.
     pub progress_m: f64,
-    /// Most decisions one step may take.
+    /// Most decisions a `goto` step may take (an `explore` step is bounded by its time).
     pub max_decisions: usize,
     /// Distance kept from the wall on the right when exploring, metres.
     pub wall_distance_m: f64,

@@ -268,10 +268,10 @@ enum Task {
 }
 
 impl Task {
-    /// How long the step may take (explore), or no limit (goto).
+    /// How long the step may take (explore), or no limit (goto: its decisions are counted).
     fn duration(&self) -> Duration {
         match self {
-            Task::Goto(_) => Duration::MAX / 4,
+            Task::Goto(_) => Duration::MAX,
             Task::Explore(d) => *d,
         }
     }
@@ -655,7 +655,8 @@ impl Tour {
                 Some(f) if f.untrusted >= config.lost_after => Decision::Done(NavOutcome::Lost {
                     untrusted: f.untrusted,
                 }),
-                _ if decisions >= config.max_decisions => {
+                // A goal's decisions are counted; exploring is bounded by its time.
+                _ if decisions >= config.max_decisions && matches!(task, Task::Goto(_)) => {
                     Decision::Done(NavOutcome::OutOfDecisions { distance_m: to_go })
                 }
                 _ => match task {
