@@ -422,21 +422,30 @@ pub fn goto_decision(
         };
     }
     let cost = |h: f64| wrap_angle(h - bearing).abs() + 0.25 * h.abs();
+    // The free way all round, once per margin (the tight one only when the full one fails).
+    let histogram = |margin: f64| -> Vec<(f64, f64)> {
+        headings(config)
+            .map(|h| (h, free_along(points, h, margin, config)))
+            .collect()
+    };
+    let pick = |histogram: &[(f64, f64)], least: f64| {
+        histogram
+            .iter()
+            .copied()
+            .filter(|&(_, free)| free >= least)
+            .min_by(|a, b| cost(a.0).total_cmp(&cost(b.0)))
+    };
     // A way open for two steps first: one step into a dead end is no way round.
     let long = distance.min(2.0 * config.step_m);
-    for (least, margin) in [
-        (long, config.margin_m),
-        (full, config.margin_m),
-        (full, config.tight_margin_m),
-        (config.min_step_m, config.tight_margin_m),
-    ] {
-        let best = headings(config)
-            .map(|h| (h, free_along(points, h, margin, config)))
-            .filter(|&(_, free)| free >= least)
-            .min_by(|a, b| cost(a.0).total_cmp(&cost(b.0)));
-        if let Some((h, free)) = best {
-            return motion(h, free, distance, config);
-        }
+    let roomy = histogram(config.margin_m);
+    let best = pick(&roomy, long)
+        .or_else(|| pick(&roomy, full))
+        .or_else(|| {
+            let tight = histogram(config.tight_margin_m);
+            pick(&tight, full).or_else(|| pick(&tight, config.min_step_m))
+        });
+    if let Some((h, free)) = best {
+        return motion(h, free, distance, config);
     }
     Decision::Done(NavOutcome::Blocked {
         nearest_m: nearest(points),

@@ -9,7 +9,7 @@
 //! ghost behind glass, an outlier, a point off the plan) search rings of cells outwards until no
 //! unseen surface can be nearer: the cost follows the distance, not the number of surfaces.
 
-use super::map::{Cap, Face, point_segment_distance};
+use super::map::{Cap, Face, point_segment_distance, point_segment_distance2};
 
 /// Which surface a point is nearest to.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
@@ -150,6 +150,32 @@ impl SurfaceIndex {
         if up < best.0 {
             best = (up, SurfaceId::Ceiling);
         }
+        let (d2, id) = self.search([p[0], p[1]], best, distance2);
+        (d2.sqrt(), id)
+    }
+
+    /// Distance in the plan from `p` to the nearest face's segment (heights and caps ignored),
+    /// and that face; infinite (and the floor) for a world without faces.
+    pub(super) fn nearest_face_in_plan(&self, p: [f64; 2], faces: &[Face]) -> (f64, SurfaceId) {
+        let distance2 = |id: SurfaceId| match id {
+            SurfaceId::Face(n) => {
+                let f = &faces[n as usize];
+                point_segment_distance2(p, f.a, f.b)
+            }
+            SurfaceId::Cap(_) | SurfaceId::Floor | SurfaceId::Ceiling => f64::INFINITY,
+        };
+        let (d2, id) = self.search(p, (f64::INFINITY, SurfaceId::Floor), distance2);
+        (d2.sqrt(), id)
+    }
+
+    /// The surface with the least `distance2` among `best` and those listed near `p`, searching
+    /// rings of cells outwards until no unseen surface can be nearer; squared distance.
+    fn search(
+        &self,
+        p: [f64; 2],
+        mut best: (f64, SurfaceId),
+        distance2: impl Fn(SurfaceId) -> f64,
+    ) -> (f64, SurfaceId) {
         let consider = |best: &mut (f64, SurfaceId), id: SurfaceId| {
             let d = distance2(id);
             if d < best.0 {
@@ -161,7 +187,7 @@ impl SurfaceIndex {
         // than r cells plus `reach` (its nearest footprint point would otherwise be within
         // `reach` of a seen cell, which lists it): stop when the best is within that.
         if self.size[0] == 0 || self.size[1] == 0 {
-            return (best.0.sqrt(), best.1);
+            return best;
         }
         let cell_of = |x: f64, k: usize| {
             let u = (x - self.origin[k]) / self.cell;
@@ -209,7 +235,7 @@ impl SurfaceIndex {
                 break;
             }
         }
-        (best.0.sqrt(), best.1)
+        best
     }
 }
 
@@ -272,6 +298,12 @@ mod tests {
                 .sqrt();
             let (d, _) = map.nearest_surface(p);
             assert_eq!(d, brute, "at {p:?}");
+            // The plan's clearance (faces only, heights ignored) through the same grid.
+            let plan = faces
+                .iter()
+                .map(|f| super::point_segment_distance([p[0], p[1]], f.a, f.b))
+                .fold(f64::INFINITY, f64::min);
+            assert_eq!(map.clearance([p[0], p[1]]), plan, "clearance at {p:?}");
         }
     }
 }

@@ -360,12 +360,10 @@ impl WorldMap {
     }
 
     /// Distance from `point` to the nearest face in the plane (heights ignored), metres; infinite
-    /// for an empty world.
+    /// for an empty world. Through the plan's grid, as every per-point question: a path of
+    /// thousands of samples in a world of thousands of faces costs what the nearby faces do.
     pub fn clearance(&self, point: [f64; 2]) -> f64 {
-        self.faces
-            .iter()
-            .map(|f| point_segment_distance(point, f.a, f.b))
-            .fold(f64::INFINITY, f64::min)
+        self.index.nearest_face_in_plan(point, &self.faces).0
     }
 
     /// Distance from `p` to the nearest surface in 3D — faces, caps, floor and ceiling.
