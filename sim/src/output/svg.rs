@@ -295,13 +295,12 @@ fn render(record: &RunRecord, world: &WorldDescription, map: &WorldMap) -> Strin
         }
         drawn.push(g);
         let (gx, gy) = plan.clamped(g[0], g[1]);
+        // A square, as its legend swatch.
         let _ = write!(
             goals,
-            r##"<path d="M{:.1} {gy:.1}L{gx:.1} {:.1}L{:.1} {gy:.1}L{gx:.1} {:.1}Z" fill="#e377c2" stroke="black"/>"##,
-            gx - 7.0,
-            gy - 7.0,
-            gx + 7.0,
-            gy + 7.0
+            r##"<rect x="{:.1}" y="{:.1}" width="10" height="10" fill="#e377c2" stroke="black"/>"##,
+            gx - 5.0,
+            gy - 5.0
         );
     }
     layers.add(

@@ -533,7 +533,7 @@ fn trajectories_svg(
                 && let Some(p) = coords.rchunks_exact(2).next()
             {
                 let (x, y) = plan.clamped(p[0], p[1]);
-                let _ = write!(ends, r#"<circle cx="{x:.1}" cy="{y:.1}" r="4"/>"#);
+                let _ = write!(ends, r#"<circle cx="{x:.1}" cy="{y:.1}" r="3.5"/>"#);
             }
         }
         layers.add(
@@ -550,7 +550,7 @@ fn trajectories_svg(
             "collisions",
             "end of a run with a collision",
             Swatch::Dots("#000000"),
-            &format!(r##"<g fill="none" stroke="#000000" stroke-width="1.5">{ends}</g>"##),
+            &format!(r##"<g fill="#000000">{ends}</g>"##),
         );
     }
     let mut goals = String::new();
