@@ -230,3 +230,46 @@ fn beams_through_the_ends_of_faces_match_too() {
     }
     assert!(aimed > 100);
 }
+
+/// A cast told a face (`cast_near`: what a reflected beam's or a sonar ray's neighbour met)
+/// answers what the plain cast answers, whether the hint is the face met, another face, one the
+/// ray misses, or no face at all: from random points in every world, in random directions,
+/// level and not.
+#[test]
+fn a_hinted_cast_meets_what_the_plain_cast_meets() {
+    let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(5);
+    let mut right_hints = 0;
+    for (name, world) in worlds() {
+        let map = WorldMap::new(&world);
+        let faces = map.faces().len();
+        let mut last = None;
+        for _ in 0..3000 {
+            let frame = random_frame(&world, &mut rng);
+            let angle = rng.random_range(-1.6f64..1.6);
+            let dir = frame.direction(angle);
+            let max = rng.random_range(0.5..32.0);
+            let plain = map.cast(frame.origin, dir, max);
+            let met = match plain {
+                Some(Hit {
+                    surface: sim::world::Surface::Face(i),
+                    ..
+                }) => Some(i),
+                _ => None,
+            };
+            for hint in [met, last, Some(rng.random_range(0..faces + 2)), None] {
+                right_hints += usize::from(hint.is_some() && hint == met);
+                let near = map.cast_near(frame.origin, dir, max, hint);
+                assert!(
+                    same(&near, &plain) && near.map(|h| h.distance) == plain.map(|h| h.distance),
+                    "{name}: from {:?} along {dir:?} within {max} m, hint {hint:?}: {near:?} against {plain:?}",
+                    frame.origin
+                );
+            }
+            last = met.or(last);
+        }
+    }
+    assert!(
+        right_hints > 1000,
+        "the hints were often right: {right_hints}"
+    );
+}

@@ -87,189 +87,243 @@ pub enum Cell {
 /// Cells a grid may hold at most (a 10 km × 10 km map at 5 cm is 4·10¹⁰: no).
 const MAX_CELLS: usize = 100_000_000;
 
-impl OccupancyGrid {
-    /// The grid of `scans`, each seen from the laser pose beside it (map frame), with a margin of
-    /// one metre; `None` when there is nothing to draw or the map would hold more than 10⁸ cells.
-    pub fn from_scans<'a>(
-        scans: impl IntoIterator<Item = (Pose2, &'a RangeScan)>,
-        config: GridConfig,
-    ) -> Option<Self> {
-        // The scans that add something: a finite pose, away from the last one inserted.
-        let mut last: Option<Pose2> = None;
-        let scans: Vec<(Pose2, &RangeScan)> = scans
-            .into_iter()
-            .filter(|(pose, _)| {
-                let finite = pose.x.is_finite() && pose.y.is_finite() && pose.theta.is_finite();
-                let moved = last.is_none_or(|l| {
-                    l.distance(pose) >= config.keyframe_m
-                        || crate::geometry::wrap_angle(l.theta - pose.theta).abs()
-                            >= config.keyframe_rad
-                });
-                if finite && moved {
-                    last = Some(*pose);
-                }
-                finite && moved
-            })
-            .collect();
-        // The bounds of what the beams reach.
+/// An occupancy grid built scan by scan, as a run goes (so a program can build its map beside
+/// the work that makes the scans, and have it when they end).
+///
+/// Cells lie on one lattice fixed in the map frame (cell `(i, j)` covers `[i r, (i + 1) r) ×
+/// [j r, (j + 1) r)`), so where a beam falls never depends on what came before; the grid's
+/// storage grows as the beams reach farther.
+#[derive(Clone, Debug)]
+pub struct GridBuilder {
+    config: GridConfig,
+    /// The laser pose of the last scan inserted.
+    last: Option<Pose2>,
+    /// The lattice index of the storage's cell (0, 0).
+    lo: [i64; 2],
+    width: usize,
+    height: usize,
+    /// Log-odds, row by row from the bottom (y increasing).
+    log_odds: Vec<f32>,
+    /// The beams' ends of the scan being inserted, and whether each hit (reused).
+    ends: Vec<([f64; 2], bool)>,
+    inserted: usize,
+    /// The grid would hold more than [`MAX_CELLS`]: nothing more is inserted.
+    too_large: bool,
+}
+
+impl GridBuilder {
+    /// An empty grid.
+    pub fn new(config: GridConfig) -> Self {
+        GridBuilder {
+            config,
+            last: None,
+            lo: [0, 0],
+            width: 0,
+            height: 0,
+            log_odds: Vec::new(),
+            ends: Vec::new(),
+            inserted: 0,
+            too_large: false,
+        }
+    }
+
+    /// Adds `scan` seen from the laser pose `laser` (map frame) if it adds something: a finite
+    /// pose, moved from the last scan inserted by [`GridConfig::keyframe_m`] or turned by
+    /// [`GridConfig::keyframe_rad`]. Returns whether it was inserted.
+    pub fn push(&mut self, laser: Pose2, scan: &RangeScan) -> bool {
+        let c = self.config;
+        let finite = laser.x.is_finite() && laser.y.is_finite() && laser.theta.is_finite();
+        let moved = self.last.is_none_or(|l| {
+            l.distance(&laser) >= c.keyframe_m
+                || crate::geometry::wrap_angle(l.theta - laser.theta).abs() >= c.keyframe_rad
+        });
+        let positive = c.resolution_m > 0.0;
+        if !(finite && moved && positive) || self.too_large {
+            return false;
+        }
+        self.last = Some(laser);
+        let mut ends = std::mem::take(&mut self.ends);
+        ends.clear();
+        ends.extend((0..scan.ranges.len()).filter_map(|i| beam_end(&c, laser, scan, i)));
+        // The cells the scan reaches, with a margin of a metre.
+        let r = c.resolution_m;
+        let margin = (1.0 / r).ceil() as i64;
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        let mut grow = |p: [f64; 2]| {
+        for p in ends.iter().map(|e| e.0).chain([[laser.x, laser.y]]) {
             for k in 0..2 {
                 lo[k] = lo[k].min(p[k]);
                 hi[k] = hi[k].max(p[k]);
             }
-        };
-        for &(pose, scan) in &scans {
-            grow([pose.x, pose.y]);
-            for i in 0..scan.ranges.len() {
-                if let Some(end) = Self::beam_end(&config, pose, scan, i) {
-                    grow(end.0);
-                }
+        }
+        let lo = [0, 1].map(|k| (lo[k] / r).floor() as i64 - margin);
+        let hi = [0, 1].map(|k| (hi[k] / r).floor() as i64 + margin);
+        if self.cover(lo, hi) {
+            for &(end, hit) in &ends {
+                self.trace([laser.x, laser.y], end, hit);
             }
+            self.inserted += 1;
         }
-        if !(lo[0].is_finite() && config.resolution_m > 0.0) {
+        self.ends = ends;
+        true
+    }
+
+    /// The grid of the scans inserted, trimmed to the cells a beam reached with a margin of ten
+    /// cells; `None` when none was inserted or the map would hold more than 10⁸ cells.
+    pub fn finish(self) -> Option<OccupancyGrid> {
+        if self.inserted == 0 || self.too_large {
             return None;
         }
-        let r = config.resolution_m;
-        let origin = [(lo[0] / r).floor() * r - 1.0, (lo[1] / r).floor() * r - 1.0];
-        let width = ((hi[0] + 1.0 - origin[0]) / r).ceil() as usize + 1;
-        let height = ((hi[1] + 1.0 - origin[1]) / r).ceil() as usize + 1;
-        if width.checked_mul(height).is_none_or(|n| n > MAX_CELLS) {
-            return None;
-        }
+        let r = self.config.resolution_m;
         let mut grid = OccupancyGrid {
-            config,
-            origin,
-            width,
-            height,
-            log_odds: vec![0.0; width * height],
+            config: self.config,
+            origin: [self.lo[0] as f64 * r, self.lo[1] as f64 * r],
+            width: self.width,
+            height: self.height,
+            log_odds: self.log_odds,
         };
-        for (pose, scan) in scans {
-            grid.insert(pose, scan);
-        }
         grid.trim();
         Some(grid)
     }
 
-    /// Where beam `i` of `scan` seen from `laser` ends, and whether it ended on something; `None`
-    /// for a beam not traced (no return, and no free range).
-    fn beam_end(
-        c: &GridConfig,
-        laser: Pose2,
-        scan: &RangeScan,
-        i: usize,
-    ) -> Option<([f64; 2], bool)> {
-        let range = scan.ranges[i];
-        let returned = scan.returned(i) && range <= c.max_range_m;
-        let length = if returned {
-            range
-        } else if c.free_range_m > 0.0 {
-            c.free_range_m.min(c.max_range_m)
-        } else {
-            return None;
-        };
-        let angle = laser.theta + scan.angle_min + scan.angle_increment * i as f64;
-        let (s, co) = angle.sin_cos();
-        Some(([laser.x + length * co, laser.y + length * s], returned))
-    }
-
-    /// Adds one scan seen from `laser` (the laser's pose in the map frame).
-    fn insert(&mut self, laser: Pose2, scan: &RangeScan) {
-        for i in 0..scan.ranges.len() {
-            if let Some((end, hit)) = Self::beam_end(&self.config, laser, scan, i) {
-                self.trace([laser.x, laser.y], end, hit);
+    /// Grows the storage to hold the lattice cells `lo..=hi`; false when it would hold more than
+    /// [`MAX_CELLS`].
+    fn cover(&mut self, lo: [i64; 2], hi: [i64; 2]) -> bool {
+        let size = [self.width as i64, self.height as i64];
+        let inside = (0..2).all(|k| lo[k] >= self.lo[k] && hi[k] < self.lo[k] + size[k]);
+        if inside && !self.log_odds.is_empty() {
+            return true;
+        }
+        let (mut new_lo, mut new_hi) = (lo, hi);
+        if !self.log_odds.is_empty() {
+            for k in 0..2 {
+                new_lo[k] = new_lo[k].min(self.lo[k]);
+                new_hi[k] = new_hi[k].max(self.lo[k] + size[k] - 1);
             }
         }
+        let needed = [0, 1].map(|k| (new_hi[k] - new_lo[k] + 1) as u64);
+        if needed[0].saturating_mul(needed[1]) > MAX_CELLS as u64 {
+            self.too_large = true;
+            return false;
+        }
+        // Room to grow by a quarter more on the sides that grew, so a robot that keeps driving
+        // into new ground copies its grid a few times, not at every scan (none when the slack
+        // alone would pass the limit).
+        let (mut grown_lo, mut grown_hi) = (new_lo, new_hi);
+        for k in 0..2 {
+            let slack = (needed[k] / 4) as i64;
+            if self.log_odds.is_empty() || new_lo[k] < self.lo[k] {
+                grown_lo[k] -= slack;
+            }
+            if self.log_odds.is_empty() || new_hi[k] >= self.lo[k] + size[k] {
+                grown_hi[k] += slack;
+            }
+        }
+        let grown = [0, 1].map(|k| (grown_hi[k] - grown_lo[k] + 1) as u64);
+        if grown[0].saturating_mul(grown[1]) <= MAX_CELLS as u64 {
+            (new_lo, new_hi) = (grown_lo, grown_hi);
+        }
+        let width = (new_hi[0] - new_lo[0] + 1) as usize;
+        let height = (new_hi[1] - new_lo[1] + 1) as usize;
+        let mut cells = vec![0.0f32; width * height];
+        for y in 0..self.height {
+            let row = (self.lo[1] - new_lo[1]) as usize + y;
+            let col = (self.lo[0] - new_lo[0]) as usize;
+            cells[row * width + col..row * width + col + self.width]
+                .copy_from_slice(&self.log_odds[y * self.width..(y + 1) * self.width]);
+        }
+        self.lo = new_lo;
+        self.width = width;
+        self.height = height;
+        self.log_odds = cells;
+        true
     }
 
-    /// Marks the cells from `a` to `b` free, and `b`'s occupied when `hit`.
+    /// Marks the cells from `a` to `b` free, and `b`'s occupied when `hit` (Amanatides & Woo:
+    /// from cell border to cell border along the beam). Both ends lie inside the storage.
     fn trace(&mut self, a: [f64; 2], b: [f64; 2], hit: bool) {
         let r = self.config.resolution_m;
-        let cell = |p: [f64; 2]| {
-            [
-                ((p[0] - self.origin[0]) / r).floor() as i64,
-                ((p[1] - self.origin[1]) / r).floor() as i64,
-            ]
-        };
-        let (mut at, last) = (cell(a), cell(b));
+        let cell = |p: [f64; 2]| [(p[0] / r).floor() as i64, (p[1] / r).floor() as i64];
+        let (at, last) = (cell(a), cell(b));
         let d = [b[0] - a[0], b[1] - a[1]];
-        let step = [d[0].signum() as i64, d[1].signum() as i64];
         // Distance along the ray (as a share of it) to the next cell border, and between borders.
         let border = |k: usize| {
+            if d[k] == 0.0 {
+                return f64::INFINITY;
+            }
             let next = if d[k] > 0.0 { at[k] + 1 } else { at[k] } as f64;
-            let edge = self.origin[k] + next * r;
+            (next * r - a[k]) / d[k]
+        };
+        let delta = |k: usize| {
             if d[k] == 0.0 {
                 f64::INFINITY
             } else {
-                (edge - a[k]) / d[k]
+                r / d[k].abs()
             }
         };
-        let mut t_max = [border(0), border(1)];
-        let t_delta = [
-            if d[0] == 0.0 {
-                f64::INFINITY
-            } else {
-                r / d[0].abs()
-            },
-            if d[1] == 0.0 {
-                f64::INFINITY
-            } else {
-                r / d[1].abs()
-            },
-        ];
+        let (mut tx, mut ty) = (border(0), border(1));
+        let (dx, dy) = (delta(0), delta(1));
+        let width = self.width as i64;
+        let index = |c: [i64; 2]| (c[1] - self.lo[1]) * width + (c[0] - self.lo[0]);
+        let (mut i, end) = (index(at), index(last));
+        let (sx, sy) = (d[0].signum() as i64, d[1].signum() as i64 * width);
         let limit = (last[0] - at[0]).unsigned_abs() + (last[1] - at[1]).unsigned_abs();
-        // The grid's bounds hold every beam with a margin, so the walk stays inside it: it
-        // follows the cell's index (a column step is ±1, a row step ±width) and `add`'s checks
-        // are needed only at the ends.
-        let inside = |c: [i64; 2]| {
-            c[0] >= 0 && c[1] >= 0 && (c[0] as usize) < self.width && (c[1] as usize) < self.height
-        };
-        if inside(at) && inside(last) {
-            let width = self.width as i64;
-            let (mut index, end) = (at[1] * width + at[0], last[1] * width + last[0]);
-            let index_step = [step[0], step[1] * width];
-            let (miss, clamp) = (self.config.miss, self.config.clamp);
-            for _ in 0..limit {
-                if index == end {
-                    break;
-                }
-                if let Some(v) = self.log_odds.get_mut(index as usize) {
-                    *v = (*v + miss).max(-clamp);
-                }
-                let k = usize::from(t_max[0] >= t_max[1]);
-                index += index_step[k];
-                t_max[k] += t_delta[k];
+        let (miss, clamp) = (self.config.miss, self.config.clamp);
+        for _ in 0..limit {
+            if i == end {
+                break;
             }
-        } else {
-            for _ in 0..limit {
-                if at == last {
-                    break;
-                }
-                self.add(at, self.config.miss);
-                if t_max[0] < t_max[1] {
-                    at[0] += step[0];
-                    t_max[0] += t_delta[0];
-                } else {
-                    at[1] += step[1];
-                    t_max[1] += t_delta[1];
-                }
+            if let Some(v) = self.log_odds.get_mut(i as usize) {
+                *v = (*v + miss).max(-clamp);
+            }
+            if tx < ty {
+                i += sx;
+                tx += dx;
+            } else {
+                i += sy;
+                ty += dy;
             }
         }
-        let end = if hit {
+        let evidence = if hit {
             self.config.hit
         } else {
             self.config.miss
         };
-        self.add(last, end);
-    }
-
-    fn add(&mut self, at: [i64; 2], evidence: f32) {
-        if at[0] < 0 || at[1] < 0 || at[0] as usize >= self.width || at[1] as usize >= self.height {
-            return;
+        if let Some(v) = self.log_odds.get_mut(end as usize) {
+            *v = (*v + evidence).clamp(-clamp, clamp);
         }
-        let i = at[1] as usize * self.width + at[0] as usize;
-        let clamp = self.config.clamp;
-        self.log_odds[i] = (self.log_odds[i] + evidence).clamp(-clamp, clamp);
+    }
+}
+
+/// Where beam `i` of `scan` seen from `laser` ends, and whether it ended on something; `None`
+/// for a beam not traced (no return, and no free range).
+fn beam_end(c: &GridConfig, laser: Pose2, scan: &RangeScan, i: usize) -> Option<([f64; 2], bool)> {
+    let range = scan.ranges[i];
+    let returned = scan.returned(i) && range <= c.max_range_m;
+    let length = if returned {
+        range
+    } else if c.free_range_m > 0.0 {
+        c.free_range_m.min(c.max_range_m)
+    } else {
+        return None;
+    };
+    let angle = laser.theta + scan.angle_min + scan.angle_increment * i as f64;
+    let (s, co) = angle.sin_cos();
+    Some(([laser.x + length * co, laser.y + length * s], returned))
+}
+
+impl OccupancyGrid {
+    /// The grid of `scans`, each seen from the laser pose beside it (map frame): a
+    /// [`GridBuilder`] fed them all. `None` when there is nothing to draw or the map would hold
+    /// more than 10⁸ cells.
+    pub fn from_scans<'a>(
+        scans: impl IntoIterator<Item = (Pose2, &'a RangeScan)>,
+        config: GridConfig,
+    ) -> Option<Self> {
+        let mut builder = GridBuilder::new(config);
+        for (pose, scan) in scans {
+            builder.push(pose, scan);
+        }
+        builder.finish()
     }
 
     /// Drops the rows and columns no beam reached, keeping a margin of ten cells.
@@ -437,5 +491,107 @@ mod tests {
         let scan = RangeScan::new(0.0, 0.01, 30.0, vec![1.0; 3]);
         let far = Pose2::new(f64::NAN, 0.0, 0.0);
         assert!(OccupancyGrid::from_scans([(far, &scan)], GridConfig::default()).is_none());
+    }
+
+    /// A 360° scan of a square room 4 m wide around `centre` (the laser's frame turned by
+    /// `theta`), and the laser pose.
+    fn room_scan(centre: [f64; 2], theta: f64) -> (Pose2, RangeScan) {
+        let n = 720;
+        let ranges: Vec<f64> = (0..n)
+            .map(|i| {
+                let a = -std::f64::consts::PI + std::f64::consts::TAU * i as f64 / n as f64 + theta;
+                2.0 / a.cos().abs().max(a.sin().abs())
+            })
+            .collect();
+        let scan = RangeScan::new(
+            -std::f64::consts::PI,
+            std::f64::consts::TAU / n as f64,
+            30.0,
+            ranges,
+        );
+        (Pose2::new(centre[0], centre[1], theta), scan)
+    }
+
+    /// Cells lie on one lattice fixed in the map frame: a room mapped after another one far away
+    /// comes out cell for cell as when mapped alone, though the grid grew to hold both.
+    #[test]
+    fn cells_do_not_depend_on_what_else_was_mapped() {
+        let (pose, scan) = room_scan([3.3, -1.7], 0.2);
+        let alone = OccupancyGrid::from_scans([(pose, &scan)], GridConfig::default()).unwrap();
+        let (far_pose, far_scan) = room_scan([-41.0, 27.0], 1.0);
+        let mut builder = GridBuilder::new(GridConfig::default());
+        assert!(builder.push(far_pose, &far_scan));
+        assert!(builder.push(pose, &scan));
+        let both = builder.finish().unwrap();
+        assert!(
+            both.size().0 > alone.size().0 + 800,
+            "the grid grew to hold both rooms"
+        );
+        let r = alone.resolution();
+        let mut compared = 0;
+        for i in -50..50 {
+            for j in -50..50 {
+                let p = [
+                    (66.0 + f64::from(i) + 0.5) * r,
+                    (-34.0 + f64::from(j) + 0.5) * r,
+                ];
+                assert_eq!(alone.at(p), both.at(p), "cell at {p:?}");
+                compared += usize::from(alone.at(p) != Some(Cell::Unknown));
+            }
+        }
+        assert!(compared > 3000, "{compared} cells seen");
+    }
+
+    /// A robot driving down a 60 m corridor: the grid grows as it goes and holds the whole
+    /// corridor, walls occupied and floor free from end to end; a scan taken where the last
+    /// one was is left out.
+    #[test]
+    fn the_grid_grows_as_the_robot_drives() {
+        let n = 361;
+        let mut builder = GridBuilder::new(GridConfig::default());
+        let mut inserted = 0;
+        for k in 0..=120 {
+            let x = 0.5 * f64::from(k);
+            // Walls at y = ±1.5 m, beyond the laser's 30 m nothing.
+            let ranges: Vec<f64> = (0..n)
+                .map(|i| {
+                    let a = -std::f64::consts::FRAC_PI_2 + std::f64::consts::PI * i as f64 / 360.0;
+                    let wall = 1.5 / a.sin().abs().max(1e-9);
+                    if wall <= 29.0 { wall } else { 31.0 }
+                })
+                .collect();
+            let scan = RangeScan::new(
+                -std::f64::consts::FRAC_PI_2,
+                std::f64::consts::PI / 360.0,
+                30.0,
+                ranges,
+            );
+            inserted += usize::from(builder.push(Pose2::new(x, 0.0, 0.0), &scan));
+            // The same place again adds nothing.
+            assert!(!builder.push(Pose2::new(x + 0.01, 0.0, 0.0), &scan));
+        }
+        assert_eq!(inserted, 121);
+        let grid = builder.finish().unwrap();
+        for x in [0.3, 15.2, 31.7, 58.1, 60.4] {
+            assert_eq!(grid.at([x, 1.51]), Some(Cell::Occupied), "left wall at {x}");
+            assert_eq!(
+                grid.at([x, -1.49]),
+                Some(Cell::Occupied),
+                "right wall at {x}"
+            );
+            assert_eq!(grid.at([x, 0.6]), Some(Cell::Free), "floor at {x}");
+        }
+        assert_eq!(grid.at([30.0, 1.8]), Some(Cell::Unknown), "behind the wall");
+    }
+
+    /// A map larger than 10⁸ cells is refused, not allocated.
+    #[test]
+    fn an_absurd_map_is_refused() {
+        let (pose, scan) = room_scan([0.0, 0.0], 0.0);
+        let (far, far_scan) = room_scan([1e6, 1e6], 0.0);
+        let mut builder = GridBuilder::new(GridConfig::default());
+        builder.push(pose, &scan);
+        builder.push(far, &far_scan);
+        assert!(builder.finish().is_none());
     }
 }

@@ -27,7 +27,7 @@ mod mbicp;
 mod quality;
 mod scan;
 
-pub use grid::{Cell, GridConfig, OccupancyGrid};
+pub use grid::{Cell, GridBuilder, GridConfig, OccupancyGrid};
 pub use icp::LeastSquares;
 pub use kdtree::KdTree;
 pub use level::{LEVEL_TOLERANCE_RAD, LevelLocaliser};

@@ -2,14 +2,18 @@
 //! scan-matching estimate, in the ROS `map_server` convention (`robot::localization::grid`).
 
 use robot::Pose2;
-use robot::localization::{GridConfig, OccupancyGrid, RangeScan};
+use robot::hardware::LaserScan;
+use robot::localization::{
+    GridConfig, LEVEL_TOLERANCE_RAD, LevelLocaliser, OccupancyGrid, RangeScan,
+};
+use robot::mount::LaserMount;
 use std::path::{Path, PathBuf};
 
 /// Writes `map.pgm` and `map.yaml` into `dir` for `scans`, each seen from the laser pose beside
 /// it (map frame); returns the files written (none when there is nothing to draw).
 pub fn write_grid<'a>(
     dir: &Path,
-    scans: impl IntoIterator<Item = (Pose2, &'a RangeScan)> + Clone,
+    scans: impl IntoIterator<Item = (Pose2, &'a RangeScan)>,
 ) -> std::io::Result<Vec<PathBuf>> {
     let Some(grid) = OccupancyGrid::from_scans(scans, GridConfig::default()) else {
         return Ok(Vec::new());
@@ -18,4 +22,12 @@ pub fn write_grid<'a>(
     std::fs::write(&pgm, grid.pgm())?;
     std::fs::write(&yaml, grid.yaml("map.pgm"))?;
     Ok(vec![pgm, yaml])
+}
+
+/// What a run's grid takes from one scan, its base at `base` in the map frame: the laser's
+/// pose in the map and the ranges, if the scan plane was level (the robot's own rule, from the
+/// head's angles, as the localiser decides).
+pub fn grid_scan(mount: &LaserMount, scan: &LaserScan, base: Pose2) -> Option<(Pose2, RangeScan)> {
+    let laser = LevelLocaliser::level_mount(mount, scan, LEVEL_TOLERANCE_RAD)?;
+    Some((base.compose(&laser), RangeScan::from(scan)))
 }

@@ -22,7 +22,7 @@ mod tum;
 mod world_json;
 pub use world_json::write_world_json;
 
-pub use grid::write_grid;
+pub use grid::{grid_scan, write_grid};
 pub use mcap::{
     RecordedScan, Recording, estimate_msg, head_transforms, no_scan, scan_msg, scan_topics,
     static_transforms, write_mcap,
@@ -61,8 +61,6 @@ pub use tum::{read_tum, write_tum};
 /// which see the floor, are left out).
 fn level_scans(record: &RunRecord, scenario: &Scenario) -> Vec<(robot::Pose2, RangeScan)> {
     let mount = scenario.robot.mount();
-    let laser =
-        |s: &crate::record::ScanRecord| mount.laser_on_base(s.scan.head).map(|l| l.planar());
     match &record.localisation {
         Some(loc) => loc
             .placed
@@ -72,15 +70,14 @@ fn level_scans(record: &RunRecord, scenario: &Scenario) -> Vec<(robot::Pose2, Ra
                     .scans
                     .binary_search_by_key(&p.stamp, |s| s.scan.stamp)
                     .ok()?;
-                let s = &record.scans[i];
-                Some((p.estimate.compose(&laser(s)?), RangeScan::from(&s.scan)))
+                grid_scan(&mount, &record.scans[i].scan, p.estimate)
             })
             .collect(),
         None => record
             .scans
             .iter()
-            .filter(|s| s.scene.is_none() && s.frame.tilt.abs() < 1e-9)
-            .filter_map(|s| Some((s.odometry.compose(&laser(s)?), RangeScan::from(&s.scan))))
+            .filter(|s| s.scene.is_none())
+            .filter_map(|s| grid_scan(&mount, &s.scan, s.odometry))
             .collect(),
     }
 }

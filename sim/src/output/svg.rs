@@ -155,7 +155,11 @@ fn render(record: &RunRecord, world: &WorldDescription, map: &WorldMap) -> Strin
             } else {
                 beyond_count += 1;
                 let (x, y) = plan.clamped(p[0], p[1]);
-                let _ = write!(beyond, "M{x:.1} {y:.1}h0");
+                beyond.push('M');
+                push_tenths(&mut beyond, x);
+                beyond.push(' ');
+                push_tenths(&mut beyond, y);
+                beyond.push_str("h0");
             }
         }
         if d.is_empty() {
@@ -478,12 +482,37 @@ fn push_halves(s: &mut String, halves: i64) {
     }
 }
 
+/// Writes `x` as `format!("{x:.1}")` does, byte for byte, without the general float formatter
+/// where the answer is plain: whole tenths counted in an integer, unless `x` is huge, not
+/// finite, a negative that rounds to zero ("-0.0") or within a millionth of a tenth of a tie
+/// (where the formatter's exact decimal rounding decides).
+pub(super) fn push_tenths(s: &mut String, x: f64) {
+    let t = x * 10.0;
+    let r = t.round();
+    let plain = t.abs() < 1e15 && (t - r).abs() < 0.5 - 1e-6 && !(r == 0.0 && x.is_sign_negative());
+    if !plain {
+        let _ = write!(s, "{x:.1}");
+        return;
+    }
+    let tenths = r as i64;
+    if tenths < 0 {
+        s.push('-');
+    }
+    let n = tenths.unsigned_abs();
+    let _ = write!(s, "{}", n / 10);
+    s.push('.');
+    s.push(char::from(b'0' + (n % 10) as u8));
+}
+
 /// The SVG path data through `points` (already in pixels), closed back to the first if
 /// `closed`.
 pub(super) fn path_data(points: impl IntoIterator<Item = (f64, f64)>, closed: bool) -> String {
     let mut d = String::new();
     for (i, (x, y)) in points.into_iter().enumerate() {
-        let _ = write!(d, "{}{x:.1} {y:.1}", if i == 0 { "M" } else { "L" });
+        d.push(if i == 0 { 'M' } else { 'L' });
+        push_tenths(&mut d, x);
+        d.push(' ');
+        push_tenths(&mut d, y);
     }
     if closed {
         d.push('Z');
@@ -530,4 +559,51 @@ fn draw_sonar(plan: &Plan, sonar: &crate::record::SonarRecord) -> String {
         }
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+
+    #[test]
+    fn tenths_are_written_as_the_formatter_writes_them() {
+        let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(7);
+        let mut values = vec![
+            0.0,
+            -0.0,
+            0.05,
+            -0.05,
+            0.25,
+            -0.25,
+            0.35,
+            1.45,
+            2.5,
+            -0.04,
+            -0.06,
+            1e14,
+            -1e14,
+            1e16,
+            123.45,
+            9.95,
+            -9.95,
+            0.95,
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for _ in 0..200_000 {
+            let scale = [1.0, 10.0, 1000.0, 1e6][rng.random_range(0..4)];
+            let x: f64 = (rng.random::<f64>() - 0.5) * scale;
+            values.push(x);
+            // Ties and near-ties in tenths and hundredths.
+            values.push((x * 100.0).round() / 100.0);
+            values.push((x * 20.0).round() / 20.0);
+        }
+        for x in values {
+            let mut s = String::new();
+            push_tenths(&mut s, x);
+            assert_eq!(s, format!("{x:.1}"), "{x:e}");
+        }
+    }
 }

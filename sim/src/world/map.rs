@@ -254,18 +254,53 @@ impl WorldMap {
         self.fan_hit(origin, dir, max, self.cast_faces(origin, dir, max))
     }
 
+    /// [`WorldMap::cast`] told the face the ray is likely to meet first (`hint`: the face a
+    /// neighbouring ray met, as a scan's reflected beams or a sonar cone's rays meet the same
+    /// wall one after another): the same answer, found sooner when the hint is right, for the
+    /// tree then only looks nearer than the hinted crossing.
+    pub fn cast_near(
+        &self,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        max: f64,
+        hint: Option<usize>,
+    ) -> Option<Hit> {
+        let start = hint
+            .filter(|&i| i < self.faces.len() && !is_vertical(dir))
+            .and_then(|i| Some((self.face_crossing(i, origin, dir, max)?, i as u32)));
+        self.fan_hit(
+            origin,
+            dir,
+            max,
+            self.cast_faces_from(origin, dir, max, start),
+        )
+    }
+
     /// The nearest vertical face along the ray within `max` metres and its distance, or
     /// `u32::MAX` for none, down the tree.
     pub(super) fn cast_faces(&self, origin: [f64; 3], dir: [f64; 3], max: f64) -> (f64, u32) {
+        self.cast_faces_from(origin, dir, max, None)
+    }
+
+    /// [`WorldMap::cast_faces`] with a face the ray is known to cross, and where (`start`), so
+    /// only nearer boxes are searched. Ties keep the face listed first, as without it.
+    fn cast_faces_from(
+        &self,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        max: f64,
+        start: Option<(f64, u32)>,
+    ) -> (f64, u32) {
         if !is_vertical(dir) {
             // In the plan the ray runs along `dir`'s horizontal part, so a crossing's parameter
             // is the distance along the ray in 3D, with no normalising.
             let slab = Slab::new([origin[0], origin[1]], [dir[0], dir[1]]);
             // The traversal prunes with `f32` costs; the nearest face is kept here in `f64`,
             // and each cost handed back is rounded up so no box that may hold it is pruned.
-            let nearest = core::cell::Cell::new((f64::INFINITY, u32::MAX));
+            let nearest = core::cell::Cell::new(start.unwrap_or((f64::INFINITY, u32::MAX)));
+            let bound = start.map_or(max, |(t, _)| t);
             self.tree.find_best(
-                round_up(max),
+                round_up(bound),
                 |node, best| slab.entry(node.mins(), node.maxs(), best),
                 |leaf, _| {
                     let t = self.face_crossing(leaf as usize, origin, dir, max)?;

@@ -20,7 +20,7 @@
 
 use crate::config::{Material, Optics};
 use crate::rng::SimRng;
-use crate::world::{Hit, WorldMap};
+use crate::world::{Hit, Surface, WorldMap};
 use parry2d::math::{Pose, Vector};
 use parry2d::query::{Ray, RayCast};
 use parry2d::shape::Ball;
@@ -154,6 +154,22 @@ impl<'a> Pulses<'a> {
         first: Option<&Hit>,
         rng: &mut SimRng,
     ) -> Echo {
+        self.trace_near(origin, dir, first, &mut None, rng)
+    }
+
+    /// [`Pulses::trace_from`] for one of a scan's beams in turn: `hint` is the face the last
+    /// beam's second leg met, and becomes this one's. Neighbouring beams reflected by the same
+    /// mirror mostly meet the same wall, so the tree is searched only nearer than it
+    /// ([`WorldMap::cast_near`]): the same echo, sooner.
+    #[inline]
+    pub fn trace_near(
+        &self,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        first: Option<&Hit>,
+        hint: &mut Option<usize>,
+        rng: &mut SimRng,
+    ) -> Echo {
         let prepared = &self.prepared;
         let optics = &prepared.optics;
         let mut travelled = 0.0;
@@ -168,7 +184,16 @@ impl<'a> Pulses<'a> {
                 let wall = first.map(|&hit| Contact::from(hit));
                 nearer_disc(wall, self.others.iter(), o, d, remaining)
             } else {
-                let wall = self.map.cast(o, d, remaining).map(Contact::from);
+                let wall = self.map.cast_near(o, d, remaining, *hint);
+                if leg == 1
+                    && let Some(Hit {
+                        surface: Surface::Face(i),
+                        ..
+                    }) = wall
+                {
+                    *hint = Some(i);
+                }
+                let wall = wall.map(Contact::from);
                 nearer_disc(wall, self.body.iter().chain(self.others), o, d, remaining)
             };
             let Some(contact) = contact else {

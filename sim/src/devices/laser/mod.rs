@@ -275,10 +275,12 @@ impl LaserModel {
             self.range_max_m,
             &mut fan,
         );
+        let mut hint: Option<usize> = None;
         let ranges_mm = (0..fan.len())
             .map(|k| {
                 let first = fan.hit(map, k);
-                let echo = pulses.trace_from(frame.origin, fan.dirs()[k], first.as_ref(), rng);
+                let dir = fan.dirs()[k];
+                let echo = pulses.trace_near(frame.origin, dir, first.as_ref(), &mut hint, rng);
                 self.reading_mm(echo, rng)
             })
             .collect();
