@@ -13,12 +13,12 @@
 
 use crate::config::robot_file::SonarDescription;
 use crate::rng::SimRng;
-use crate::world::{Hit, Surface, WorldMap};
+use crate::world::{Hit, WorldMap};
 use rand_distr::{Distribution, StandardNormal};
 use robot::Pose2;
 
 /// Reflections a burst may undergo before it is too weak to be heard.
-const MAX_BOUNCES: usize = 2;
+const MAX_BOUNCES: u32 = 2;
 
 /// The acoustic model of a ring of transducers.
 #[derive(Clone, Debug)]
@@ -104,14 +104,10 @@ impl SonarModel {
         let (origin, dirs) = self.rays(base, k)?;
         // Each ray followed only as far as the nearest echo so far (a longer path cannot bring
         // a nearer one), the axis first, where the nearest echo most often is.
-        // Neighbouring rays mostly meet the same faces, leg for leg: each cast is told the face
-        // the last ray's same leg met (`WorldMap::cast_near`, the same answer sooner).
         let mut nearest = f64::INFINITY;
-        let mut hints = [None; MAX_BOUNCES + 1];
         for &k in &self.centre_first {
-            let first = map.cast_near(origin, dirs[k], self.max_range.min(nearest), hints[0]);
-            note_face(&mut hints[0], first.as_ref());
-            if let Some(r) = self.follow(map, origin, dirs[k], first, nearest, &mut hints) {
+            let first = map.cast(origin, dirs[k], self.max_range.min(nearest));
+            if let Some(r) = self.follow(map, origin, dirs[k], first, nearest) {
                 nearest = nearest.min(r);
             }
         }
@@ -132,8 +128,7 @@ impl SonarModel {
             .iter()
             .filter_map(|&dir| {
                 let first = map.cast(origin, dir, self.max_range);
-                let mut no_hints = [None; MAX_BOUNCES + 1];
-                self.follow(map, origin, dir, first, f64::INFINITY, &mut no_hints)
+                self.follow(map, origin, dir, first, f64::INFINITY)
             })
             .fold(f64::INFINITY, f64::min);
         self.heard(nearest, rng)
@@ -172,19 +167,15 @@ impl SonarModel {
         dir: [f64; 3],
         first: Option<Hit>,
         limit: f64,
-        hints: &mut [Option<usize>; MAX_BOUNCES + 1],
     ) -> Option<f64> {
         let (mut o, mut d) = ([origin[0], origin[1]], [dir[0], dir[1]]);
         let mut travelled = 0.0;
         let reach = self.max_range.min(limit);
-        for (leg, hint) in hints.iter_mut().enumerate() {
+        for leg in 0..=MAX_BOUNCES {
             let hit = if leg == 0 {
                 first.filter(|h| h.distance <= reach)?
             } else {
-                let at = [o[0], o[1], self.height];
-                let hit = map.cast_near(at, [d[0], d[1], 0.0], reach - travelled, *hint);
-                note_face(hint, hit.as_ref());
-                hit?
+                map.cast_level(o, self.height, d, reach - travelled)?
             };
             travelled += hit.distance;
             let n = [hit.normal[0], hit.normal[1]];
@@ -199,17 +190,6 @@ impl SonarModel {
             o = [p[0] + n[0] * 1e-5, p[1] + n[1] * 1e-5];
         }
         None
-    }
-}
-
-/// Keeps the face `hit` met as the hint for the next ray's same leg.
-fn note_face(hint: &mut Option<usize>, hit: Option<&Hit>) {
-    if let Some(Hit {
-        surface: Surface::Face(i),
-        ..
-    }) = hit
-    {
-        *hint = Some(*i);
     }
 }
 

@@ -255,9 +255,9 @@ impl WorldMap {
     }
 
     /// [`WorldMap::cast`] told the face the ray is likely to meet first (`hint`: the face a
-    /// neighbouring ray met, as a scan's reflected beams or a sonar cone's rays meet the same
-    /// wall one after another): the same answer, found sooner when the hint is right, for the
-    /// tree then only looks nearer than the hinted crossing.
+    /// neighbouring ray met, as a scan's beams reflected by one mirror meet the same wall one
+    /// after another): the same answer, found sooner when the hint is right, for the tree then
+    /// only looks nearer than the hinted crossing.
     pub fn cast_near(
         &self,
         origin: [f64; 3],

@@ -170,6 +170,34 @@ impl<'a> Pulses<'a> {
         hint: &mut Option<usize>,
         rng: &mut SimRng,
     ) -> Echo {
+        // Most beams end on the first surface, matte and not grazed: answered here, as the
+        // general path below would answer, without its call.
+        if let Some(hit) = first
+            && hit.material == Material::Matte
+            && self.others.is_empty()
+            && self.max_range > 0.0
+        {
+            let n = hit.normal;
+            let along = dir[0] * n[0] + dir[1] * n[1] + dir[2] * n[2];
+            return if (-along).clamp(-1.0, 1.0) <= self.prepared.cos_grazing {
+                Echo::Lost
+            } else {
+                Echo::Range(hit.distance)
+            };
+        }
+        self.follow(origin, dir, first, hint, rng)
+    }
+
+    /// The pulse's legs, surface by surface, for [`Pulses::trace_near`].
+    #[inline(never)]
+    fn follow(
+        &self,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        first: Option<&Hit>,
+        hint: &mut Option<usize>,
+        rng: &mut SimRng,
+    ) -> Echo {
         let prepared = &self.prepared;
         let optics = &prepared.optics;
         let mut travelled = 0.0;

@@ -267,23 +267,27 @@ impl LaserModel {
                 .collect();
             return self.telegram(stamp, ranges_mm);
         }
-        let mut fan = FanCast::default();
-        map.cast_plane_fan(
-            frame.origin,
-            frame.axes(),
-            &self.beams,
-            self.range_max_m,
-            &mut fan,
-        );
-        let mut hint: Option<usize> = None;
-        let ranges_mm = (0..fan.len())
-            .map(|k| {
-                let first = fan.hit(map, k);
-                let dir = fan.dirs()[k];
-                let echo = pulses.trace_near(frame.origin, dir, first.as_ref(), &mut hint, rng);
-                self.reading_mm(echo, rng)
-            })
-            .collect();
+        // The sweep's buffers are kept from one scan to the next, one set per thread.
+        thread_local! {
+            static FAN: core::cell::RefCell<FanCast> = core::cell::RefCell::new(FanCast::default());
+        }
+        let ranges_mm = FAN.with_borrow_mut(|fan| {
+            map.cast_plane_fan(
+                frame.origin,
+                frame.axes(),
+                &self.beams,
+                self.range_max_m,
+                fan,
+            );
+            let mut hint: Option<usize> = None;
+            (0..fan.len())
+                .map(|k| {
+                    let (first, dir) = (fan.hit(map, k), fan.dirs()[k]);
+                    let echo = pulses.trace_near(frame.origin, dir, first.as_ref(), &mut hint, rng);
+                    self.reading_mm(echo, rng)
+                })
+                .collect::<Vec<u16>>()
+        });
         self.telegram(stamp, ranges_mm)
     }
 
