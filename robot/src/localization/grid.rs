@@ -107,7 +107,8 @@ pub struct GridBuilder {
     /// The beams' ends of the scan being inserted, and whether each hit (reused).
     ends: Vec<([f64; 2], bool)>,
     inserted: usize,
-    /// The grid would hold more than [`MAX_CELLS`]: nothing more is inserted.
+    /// The grid would hold more than [`MAX_CELLS`], or a scan lay beyond 2⁴⁰ cells: nothing more
+    /// is inserted.
     too_large: bool,
 }
 
@@ -155,16 +156,27 @@ impl GridBuilder {
                 hi[k] = hi[k].max(p[k]);
             }
         }
-        let lo = [0, 1].map(|k| (lo[k] / r).floor() as i64 - margin);
-        let hi = [0, 1].map(|k| (hi[k] / r).floor() as i64 + margin);
-        if self.cover(lo, hi) {
+        // Lattice indices as far as 2⁴⁰ cells from the origin (55,000 km at 5 cm); a scan
+        // beyond is no map anyone can hold.
+        let far = (1u64 << 40) as f64;
+        let (lo, hi) = (
+            [0, 1].map(|k| (lo[k] / r).floor()),
+            [0, 1].map(|k| (hi[k] / r).floor()),
+        );
+        if !(0..2).all(|k| lo[k].abs() < far && hi[k].abs() < far) {
+            self.too_large = true;
+        }
+        let lo = [0, 1].map(|k| lo[k] as i64 - margin);
+        let hi = [0, 1].map(|k| hi[k] as i64 + margin);
+        let inserted = !self.too_large && self.cover(lo, hi);
+        if inserted {
             for &(end, hit) in &ends {
                 self.trace([laser.x, laser.y], end, hit);
             }
             self.inserted += 1;
         }
         self.ends = ends;
-        true
+        inserted
     }
 
     /// The grid of the scans inserted, trimmed to the cells a beam reached with a margin of ten
@@ -588,10 +600,12 @@ mod tests {
     #[test]
     fn an_absurd_map_is_refused() {
         let (pose, scan) = room_scan([0.0, 0.0], 0.0);
-        let (far, far_scan) = room_scan([1e6, 1e6], 0.0);
-        let mut builder = GridBuilder::new(GridConfig::default());
-        builder.push(pose, &scan);
-        builder.push(far, &far_scan);
-        assert!(builder.finish().is_none());
+        for place in [1e6, 1e300, -1e300] {
+            let (far, far_scan) = room_scan([place, 1e6], 0.0);
+            let mut builder = GridBuilder::new(GridConfig::default());
+            assert!(builder.push(pose, &scan));
+            assert!(!builder.push(far, &far_scan), "{place}");
+            assert!(builder.finish().is_none());
+        }
     }
 }

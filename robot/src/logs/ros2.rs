@@ -53,35 +53,6 @@ impl Encoded {
             cdr: msg.to_cdr(),
         }
     }
-
-    /// A `std_msgs/String` to be refilled many times ([`Encoded::refill_string`]), its buffer
-    /// kept from one text to the next.
-    pub fn reusable_string() -> Self {
-        Encoded::of(&StringMsg(String::new()))
-    }
-
-    /// Makes this message the `std_msgs/String` whose text `write` appends to the buffer it is
-    /// given: a long text (a recording's tape) is written once, straight into the message,
-    /// instead of being built, copied and encoded. `write` must append UTF-8 only.
-    pub fn refill_string<E>(
-        &mut self,
-        write: impl FnOnce(&mut Vec<u8>) -> Result<(), E>,
-    ) -> Result<(), E> {
-        *self = Encoded {
-            name: StringMsg::NAME,
-            definition: StringMsg::definition,
-            cdr: std::mem::take(&mut self.cdr),
-        };
-        // The encapsulation, then the length (patched below), the text and its NUL.
-        self.cdr.clear();
-        self.cdr.extend_from_slice(&ENCAPSULATION_LE);
-        self.cdr.extend_from_slice(&[0; 4]);
-        write(&mut self.cdr)?;
-        self.cdr.push(0);
-        let n = u32::try_from(self.cdr.len() - 8).unwrap_or(u32::MAX);
-        self.cdr[4..8].copy_from_slice(&n.to_le_bytes());
-        Ok(())
-    }
 }
 
 /// Builds a CDR little-endian message.
@@ -825,24 +796,6 @@ impl<'a> CdrReader<'a> {
 
 #[cfg(test)]
 mod tests {
-    #[test]
-    fn a_refilled_string_encodes_as_the_message() {
-        let mut msg = Encoded::reusable_string();
-        for text in ["a longer text than the next", "", "{\"ok\": true}"] {
-            msg.refill_string(|buf| -> Result<(), ()> {
-                buf.extend_from_slice(text.as_bytes());
-                Ok(())
-            })
-            .unwrap();
-            assert_eq!(
-                msg.cdr,
-                Encoded::of(&StringMsg(text.to_string())).cdr,
-                "{text:?}"
-            );
-            assert_eq!(msg.name, StringMsg::NAME);
-        }
-    }
-
     use super::*;
 
     fn scan() -> LaserScanMsg {

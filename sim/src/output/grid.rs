@@ -27,7 +27,11 @@ pub fn write_grid<'a>(
 /// What a run's grid takes from one scan, its base at `base` in the map frame: the laser's
 /// pose in the map and the ranges, if the scan plane was level (the robot's own rule, from the
 /// head's angles, as the localiser decides).
-pub fn grid_scan(mount: &LaserMount, scan: &LaserScan, base: Pose2) -> Option<(Pose2, RangeScan)> {
+pub(super) fn grid_scan(
+    mount: &LaserMount,
+    scan: &LaserScan,
+    base: Pose2,
+) -> Option<(Pose2, RangeScan)> {
     let laser = LevelLocaliser::level_mount(mount, scan, LEVEL_TOLERANCE_RAD)?;
     Some((base.compose(&laser), RangeScan::from(scan)))
 }

@@ -24,7 +24,7 @@ use robot::hardware::{HeadAngles, LaserScan, SPEED_OF_SOUND, echo_distance_m};
 use robot::logs::mcap::Recorder;
 use robot::logs::ros2::{
     ClockMsg, Encoded, Header, LaserScanMsg, LogMsg, OdometryMsg, PointCloudMsg, PoseStampedMsg,
-    RangeMsg, TfMessage, Transform, TransformStamped,
+    RangeMsg, StringMsg, TfMessage, Transform, TransformStamped,
 };
 use robot::mount::LaserMount;
 use robot::{Pose2, Stamp};
@@ -270,15 +270,11 @@ fn write(path: &Path, r: &Recording) -> Result<u32, robot::logs::mcap::RecordErr
         )?;
     }
     // The tape, each exchange at its answer's stamp (or the last stamp before it).
-    // Each exchange's JSON is written straight into one reused message.
     let mut at = Stamp::ZERO;
-    let mut message = Encoded::reusable_string();
     for exchange in r.tape {
         at = exchange.stamp().map_or(at, |s| s.max(at));
-        message
-            .refill_string(|buf| serde_json::to_writer(buf, exchange))
-            .expect("an exchange serialises");
-        rec.write_encoded(robot::logs::mcap::TAPE_TOPIC, at, &message)?;
+        let json = serde_json::to_string(exchange).expect("an exchange serialises");
+        rec.write(robot::logs::mcap::TAPE_TOPIC, at, &StringMsg(json))?;
     }
     let n = rec.messages();
     rec.finish()?;

@@ -22,7 +22,8 @@ mod tum;
 mod world_json;
 pub use world_json::write_world_json;
 
-pub use grid::{grid_scan, write_grid};
+use grid::grid_scan;
+pub use grid::write_grid;
 pub use mcap::{
     RecordedScan, Recording, estimate_msg, head_transforms, no_scan, scan_msg, scan_topics,
     static_transforms, write_mcap,
@@ -57,8 +58,8 @@ pub use tilted::{last_tilted, write_tilted_svg};
 pub use tum::{read_tum, write_tum};
 
 /// A run's level scans with the laser's pose in the world when each was taken: by the
-/// scan-matching estimate when the run localises, else by odometry (scenes' and tilted scans,
-/// which see the floor, are left out).
+/// scan-matching estimate when the run localises, else by odometry (scenes' scans, and those
+/// the head's reported angles put off level, as the localiser judges, are left out).
 fn level_scans(record: &RunRecord, scenario: &Scenario) -> Vec<(robot::Pose2, RangeScan)> {
     let mount = scenario.robot.mount();
     match &record.localisation {
