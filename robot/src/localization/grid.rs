@@ -465,26 +465,9 @@ mod tests {
     /// its inside free, the outside unknown.
     #[test]
     fn a_room_seen_from_inside() {
-        let n = 720;
-        let ranges: Vec<f64> = (0..n)
-            .map(|i| {
-                let a = -std::f64::consts::PI + std::f64::consts::TAU * i as f64 / n as f64;
-                2.0 / a.cos().abs().max(a.sin().abs())
-            })
-            .collect();
-        let scan = RangeScan::new(
-            -std::f64::consts::PI,
-            std::f64::consts::TAU / n as f64,
-            30.0,
-            ranges,
-        );
-        let pose = Pose2::new(10.0, -3.0, 0.3);
-        // The room is square in the laser's frame: turn the points back.
+        let (pose, scan) = room_scan([10.02, -3.02], 0.3);
         let grid = OccupancyGrid::from_scans([(pose, &scan)], GridConfig::default()).unwrap();
-        let world = |x: f64, y: f64| {
-            let (s, c) = pose.theta.sin_cos();
-            [pose.x + c * x - s * y, pose.y + s * x + c * y]
-        };
+        let world = |x: f64, y: f64| [pose.x + x, pose.y + y];
         assert_eq!(grid.at(world(0.0, 0.0)), Some(Cell::Free));
         assert_eq!(grid.at(world(1.2, -0.7)), Some(Cell::Free));
         assert_eq!(grid.at(world(2.0, 0.3)), Some(Cell::Occupied));
@@ -505,8 +488,8 @@ mod tests {
         assert!(OccupancyGrid::from_scans([(far, &scan)], GridConfig::default()).is_none());
     }
 
-    /// A 360° scan of a square room 4 m wide around `centre` (the laser's frame turned by
-    /// `theta`), and the laser pose.
+    /// A 360° scan of a square room 4 m wide around `centre`, its walls along the map's axes,
+    /// from a laser turned by `theta`, and the laser pose.
     fn room_scan(centre: [f64; 2], theta: f64) -> (Pose2, RangeScan) {
         let n = 720;
         let ranges: Vec<f64> = (0..n)
