@@ -136,7 +136,7 @@ fn numbers<'a>(
     what: &str,
 ) -> Result<Vec<f64>, LogError> {
     (0..n)
-        .map(|i| at.number(fields.next(), &format!("{what} {} of {n}", i + 1)))
+        .map(|i| at.number_named(fields.next(), || format!("{what} {} of {n}", i + 1)))
         .collect()
 }
 
@@ -192,6 +192,11 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.starts_with("t.clf:3:") && err.contains("`x`"), "{err}");
+        // A garbled reading is named by its place, and what was found quoted.
+        let err = parse("FLASER 3 1.0 zz 2.0 0 0 0 0 0 0 5 h 1\n", "t.clf")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("range 2 of 3 `zz` is not a number"), "{err}");
         let err = parse("FLASER -2\n", "t.clf").unwrap_err().to_string();
         assert!(err.contains("count"), "{err}");
     }

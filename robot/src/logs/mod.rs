@@ -166,13 +166,22 @@ impl Cursor<'_> {
 
     /// Parses field `what` as a finite number.
     fn number(&self, text: Option<&str>, what: &str) -> Result<f64, LogError> {
-        let text = text.ok_or_else(|| self.error(format!("missing {what} (line ends early)")))?;
+        self.number_named(text, || what.to_string())
+    }
+
+    /// [`Cursor::number`] for a field whose name is written only if it is wrong (a scan's
+    /// hundreds of readings each have one: naming them all cost more than reading them).
+    fn number_named(&self, text: Option<&str>, what: impl Fn() -> String) -> Result<f64, LogError> {
+        let Some(text) = text else {
+            return Err(self.error(format!("missing {} (line ends early)", what())));
+        };
         match text.trim().parse::<f64>() {
             Ok(v) if v.abs() <= MAX_LOG_NUMBER => Ok(v),
             Ok(_) => Err(self.error(format!(
-                "{what} `{text}` is not plausible: expected a magnitude up to 1e12"
+                "{} `{text}` is not plausible: expected a magnitude up to 1e12",
+                what()
             ))),
-            _ => Err(self.error(format!("{what} `{text}` is not a number"))),
+            _ => Err(self.error(format!("{} `{text}` is not a number", what()))),
         }
     }
 }

@@ -118,7 +118,7 @@ fn csv(at: &Cursor<'_>, text: &str, what: &str) -> Result<Vec<f64>, LogError> {
     text.split(',')
         .filter(|t| !t.trim().is_empty())
         .enumerate()
-        .map(|(i, t)| at.number(Some(t), &format!("{what} {}", i + 1)))
+        .map(|(i, t)| at.number_named(Some(t), || format!("{what} {}", i + 1)))
         .collect()
 }
 

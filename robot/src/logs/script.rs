@@ -65,7 +65,9 @@ pub(super) fn parse(text: &str, file: &str) -> Result<RecordedLog, LogError> {
                 let ranges: Vec<f64> = body
                     .split_whitespace()
                     .enumerate()
-                    .map(|(i, d)| Ok(at.number(Some(d), &format!("distance {}", i + 1))? * 1e-3))
+                    .map(|(i, d)| {
+                        Ok(at.number_named(Some(d), || format!("distance {}", i + 1))? * 1e-3)
+                    })
                     .collect::<Result<_, LogError>>()?;
                 if ranges.len() != n {
                     return Err(at.error(format!(
