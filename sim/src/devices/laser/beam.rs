@@ -512,4 +512,44 @@ points = [[1, -50], [1, 50]]
         let e = echo(&m, &Optics::default(), None, [0.0, 0.0], 10.0, 1);
         assert_eq!(e, Echo::Lost);
     }
+
+    /// The inline answer for a beam that ends on its first matte surface is the general loop's
+    /// answer, echo for echo and draw for draw: from random poses in the lab (matte, black,
+    /// glass and metal walls), level and tilted, at every incidence, grazing included.
+    #[test]
+    fn the_first_matte_surface_shortcut_answers_as_the_loop() {
+        use rand::SeedableRng;
+        let text = std::fs::read_to_string(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../worlds/lab.toml"),
+        )
+        .unwrap();
+        let world = WorldDescription::parse(&text, "lab.toml").unwrap();
+        let m = WorldMap::new(&world);
+        let pulses = Pulses::new(&m, None, 32.0);
+        let (min, max) = world.bounds();
+        let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(3);
+        let mut matte = 0;
+        for k in 0..20_000u64 {
+            let origin = [
+                rng.random_range(min[0]..max[0]),
+                rng.random_range(min[1]..max[1]),
+                rng.random_range(0.1..1.2),
+            ];
+            let a: f64 = rng.random_range(-3.2..3.2);
+            let e: f64 = if k % 2 == 0 {
+                0.0
+            } else {
+                rng.random_range(-0.4..0.4)
+            };
+            let dir = [a.cos() * e.cos(), a.sin() * e.cos(), e.sin()];
+            let first = m.cast(origin, dir, 32.0);
+            matte += usize::from(first.is_some_and(|h| h.material == Material::Matte));
+            let (mut r1, mut r2) = (crate::rng::substream(9, k), crate::rng::substream(9, k));
+            let short = pulses.trace_near(origin, dir, first.as_ref(), &mut None, &mut r1);
+            let long = pulses.follow(origin, dir, first.as_ref(), &mut None, &mut r2);
+            assert_eq!(short, long, "from {origin:?} along {dir:?}");
+            assert_eq!(r1.random::<u64>(), r2.random::<u64>(), "the same draws");
+        }
+        assert!(matte > 5000, "{matte} beams ended on matte first");
+    }
 }
