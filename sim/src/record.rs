@@ -82,6 +82,10 @@ pub struct RunRecord {
     pub tape: Vec<robot::replay::Exchange>,
     /// What the navigating steps (`goto`, `explore`) decided, in order.
     pub decisions: Vec<DecisionRecord>,
+    /// The occupancy grid of the run's level scans, when the run built it beside the
+    /// simulation as the scans came (`Some(None)`: nothing to draw); `None` when it did not,
+    /// and `map.pgm` is built from the scans afterwards.
+    pub grid: Option<Option<robot::localization::OccupancyGrid>>,
 }
 
 /// What the localisation made of a run's scans.

@@ -89,6 +89,7 @@ where
         robot,
         &scenario,
         &super::run::RunOptions::default(),
+        None,
         |_| Ok(()),
         progress,
     )?;

@@ -60,6 +60,7 @@ pub fn replay_scenario(
         &mut robot,
         scenario,
         &RunOptions::default(),
+        None,
         |_| Ok(()),
         progress,
     )

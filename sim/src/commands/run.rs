@@ -4,6 +4,7 @@
 use super::reconstruct::{SceneInput, reconstruct};
 use crate::config::scenario::SonarSettings;
 use crate::config::{ConfigError, Scenario};
+use crate::output::GridStream;
 use crate::record::DecisionRecord;
 use crate::record::{LocalisationRecord, RunRecord, ScanRecord, SonarRecord};
 use crate::twin::sim_robot::{GroundTruth, SimError, SimRobot};
@@ -53,6 +54,10 @@ pub struct RunOptions {
     pub tour: Option<TourConfig>,
     /// Publishes the run live, paced to the wall clock.
     pub live: Option<Live>,
+    /// Builds the occupancy grid of `map.pgm` on a thread of its own as the scans come
+    /// ([`crate::output::GridStream`]), into [`RunRecord::grid`]: the map is ready when the
+    /// simulation ends (`twin run` does; runs whose files are not written need not).
+    pub stream_grid: bool,
 }
 
 /// A run published live (`twin run --live`): its topics on a Foxglove WebSocket server, the
@@ -151,12 +156,15 @@ impl Live {
     }
 }
 
+/// A scan the tour kept, with the odometry at its stamp and its scene.
+pub type Kept = (LaserScan, robot::Pose2, Option<robot::control::SceneTag>);
+
 /// What the controller did through the contract, on any backend: the part of a run that a
 /// replay repeats.
 #[derive(Debug)]
 pub struct Controlled {
     /// The scans the tour kept, with the odometry at their stamp and their scene.
-    pub kept: Vec<(LaserScan, robot::Pose2, Option<robot::control::SceneTag>)>,
+    pub kept: Vec<Kept>,
     /// The localisation, when the scenario asks for it.
     pub localisation: Option<LocalisationRecord>,
     /// The tour's report.
@@ -178,6 +186,7 @@ pub fn control<R>(
     robot: &mut R,
     scenario: &Scenario,
     options: &RunOptions,
+    mut grid: Option<&mut GridStream>,
     ready: impl FnOnce(&mut R) -> Result<(), R::Error>,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<Controlled, TourError<R::Error>>
@@ -210,6 +219,7 @@ where
     }
     let mut localising = 0.0;
     let mut decisions = Vec::new();
+    let mut gridded = 0;
     let watcher = Watcher {
         scenario,
         live: options.live.as_ref(),
@@ -220,6 +230,8 @@ where
         published_estimates: 0,
         kept: &mut kept,
         decisions: &mut decisions,
+        grid: grid.as_deref_mut(),
+        gridded: &mut gridded,
     };
     let report = run_tour(
         robot,
@@ -239,6 +251,9 @@ where
     let localisation = localiser.map(|localiser| {
         let matcher = localiser.kind();
         let (placed, map) = localiser.finish();
+        if let Some(grid) = grid {
+            grid_placed(grid, &placed[gridded.min(placed.len())..], &kept);
+        }
         LocalisationRecord {
             matcher,
             placed,
@@ -266,8 +281,21 @@ struct Watcher<'a, P> {
     localiser: Option<&'a mut LevelLocaliser>,
     localising: &'a mut f64,
     published_estimates: usize,
-    kept: &'a mut Vec<(LaserScan, robot::Pose2, Option<robot::control::SceneTag>)>,
+    kept: &'a mut Vec<Kept>,
     decisions: &'a mut Vec<DecisionRecord>,
+    /// The grid built as the scans come, if any, and how many placed scans it was given.
+    grid: Option<&'a mut GridStream>,
+    gridded: &'a mut usize,
+}
+
+/// Gives `grid` the scans of `placed`, each at its estimate (its scan found in `kept` by its
+/// stamp): the grid of a run that localises.
+fn grid_placed(grid: &mut GridStream, placed: &[robot::localization::Placed], kept: &[Kept]) {
+    for p in placed {
+        if let Ok(i) = kept.binary_search_by_key(&p.stamp, |k| k.0.stamp) {
+            grid.push(&kept[i].0, p.estimate);
+        }
+    }
 }
 
 impl<P: FnMut(usize, usize)> TourObserver for Watcher<'_, P> {
@@ -296,6 +324,18 @@ impl<P: FnMut(usize, usize)> TourObserver for Watcher<'_, P> {
                     self.published_estimates = placed.len();
                 }
                 self.kept.push((scan.clone(), odometry, scene));
+                if let Some(grid) = self.grid.as_deref_mut() {
+                    match &self.localiser {
+                        Some(localiser) => {
+                            let placed = localiser.placed();
+                            let new = &placed[(*self.gridded).min(placed.len())..];
+                            grid_placed(grid, new, self.kept);
+                            *self.gridded = placed.len();
+                        }
+                        None if scene.is_none() => grid.push(scan, odometry),
+                        None => {}
+                    }
+                }
             }
             TourEvent::Decision {
                 stamp,
@@ -354,10 +394,14 @@ pub fn run_scenario(
             }
         });
     }
+    let mut grid = options
+        .stream_grid
+        .then(|| GridStream::start(scenario.robot.mount()));
     let controlled = control(
         &mut taped,
         &scenario,
         options,
+        grid.as_mut(),
         |r| r.inner_mut().wait_pan_tilt_ready(),
         progress,
     )
@@ -428,13 +472,14 @@ pub fn run_scenario(
         source,
     })?;
     let twin = robot.twin();
+    let wall_seconds = started.elapsed().as_secs_f64();
     Ok(RunRecord {
         scenario: scenario.name.clone(),
         seed: scenario.seed,
         scans,
         steps: report.steps,
         end: twin.now(),
-        wall_seconds: started.elapsed().as_secs_f64(),
+        wall_seconds,
         distance_m: twin.distance_travelled(),
         collisions: twin.collisions(),
         stalled_motions: report.stalled,
@@ -448,6 +493,7 @@ pub fn run_scenario(
         reconstruction,
         tape,
         decisions,
+        grid: grid.map(GridStream::finish),
     })
 }
 
@@ -606,6 +652,7 @@ pub fn main(args: RunArgs) -> Result<(), super::CommandError> {
     let options = RunOptions {
         seed: args.seed,
         live: live.clone(),
+        stream_grid: true,
         ..RunOptions::default()
     };
     let record = run_scenario(&scenario, &options, |done, _| bar.set_position(done as u64))?;

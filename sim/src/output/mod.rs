@@ -23,7 +23,7 @@ mod world_json;
 pub use world_json::write_world_json;
 
 use grid::grid_scan;
-pub use grid::write_grid;
+pub use grid::{GridStream, write_grid};
 pub use mcap::{
     RecordedScan, Recording, estimate_msg, head_transforms, no_scan, scan_msg, scan_topics,
     static_transforms, write_mcap,
@@ -212,11 +212,12 @@ pub fn write_all(record: &RunRecord, scenario: &Scenario, dir: &Path) -> std::io
             write_mcap(&path("run.mcap"), &recording(record, scenario))
                 .map(|_| vec![path("run.mcap")])
         });
-        let grid = s.spawn(|| {
-            write_grid(
+        let grid = s.spawn(|| match &record.grid {
+            Some(built) => grid::write_grid_files(dir, built.as_ref()),
+            None => write_grid(
                 dir,
                 level_scans(record, scenario).iter().map(|(p, s)| (*p, s)),
-            )
+            ),
         });
         let reconstruction = s.spawn(|| match &record.reconstruction {
             Some(recon) => write_reconstruction(dir, recon, &record.scenario, Some(map)),
