@@ -408,12 +408,12 @@ fn a_bad_map_table_names_its_field() {
     }
 }
 
-/// `twin run` builds the occupancy grid on a thread of its own while the simulation goes on; the
-/// map it writes is, byte for byte, the one built from the run's scans afterwards — with the
-/// estimate (lab tour), by odometry (glass door), with scenes left out (scene lab) and with the
-/// laser on the pan-tilt (thesis tour), across seeds.
+/// `twin run` builds the occupancy grid and the scans' lines on a thread of their own while the
+/// simulation goes on; the files it writes are, byte for byte, the ones built from the run's
+/// record afterwards — with the estimate (lab tour), by odometry (glass door), with scenes left
+/// out (scene lab) and with the laser on the pan-tilt (thesis tour), across seeds.
 #[test]
-fn the_grid_built_during_a_run_is_the_grid_built_after_it() {
+fn the_files_built_during_a_run_are_the_files_built_after_it() {
     use sim::commands::run::{RunOptions, run_scenario};
     let root = std::env::temp_dir().join(format!("twin-issue-19-stream-{}", std::process::id()));
     for (name, seed) in [
@@ -424,23 +424,20 @@ fn the_grid_built_during_a_run_is_the_grid_built_after_it() {
     ] {
         let options = RunOptions {
             seed: Some(seed),
-            stream_grid: true,
+            stream: true,
             ..RunOptions::default()
         };
         let streamed = run_scenario(&scenario(name), &options, |_, _| {}).expect("the run");
-        assert!(
-            streamed.grid.is_some(),
-            "{name}: the grid was built as it went"
-        );
+        assert!(streamed.streamed.is_some(), "{name}: built as it went");
         let mut after = streamed.clone();
-        after.grid = None;
+        after.streamed = None;
         let (a, b) = (
             root.join(format!("{name}-a")),
             root.join(format!("{name}-b")),
         );
         sim::output::write_all(&streamed, &scenario(name), &a).unwrap();
         sim::output::write_all(&after, &scenario(name), &b).unwrap();
-        for file in ["map.pgm", "map.yaml"] {
+        for file in ["map.pgm", "map.yaml", "scans.jsonl"] {
             let (x, y) = (std::fs::read(a.join(file)), std::fs::read(b.join(file)));
             assert!(x.is_ok(), "{name}: {file} written");
             assert!(x.ok() == y.ok(), "{name} seed {seed}: {file} differs");

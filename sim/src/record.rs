@@ -82,10 +82,18 @@ pub struct RunRecord {
     pub tape: Vec<robot::replay::Exchange>,
     /// What the navigating steps (`goto`, `explore`) decided, in order.
     pub decisions: Vec<DecisionRecord>,
-    /// The occupancy grid of the run's level scans, when the run built it beside the
-    /// simulation as the scans came (`Some(None)`: nothing to draw); `None` when it did not,
-    /// and `map.pgm` is built from the scans afterwards.
-    pub grid: Option<Option<robot::localization::OccupancyGrid>>,
+    /// The files built beside the simulation as the scans came, when the run did
+    /// (`twin run`); `None` when it did not, and they are built from the record afterwards.
+    pub streamed: Option<Streamed>,
+}
+
+/// What a run built from its scans while it went on (`crate::output::ScanStream`).
+#[derive(Clone, Debug)]
+pub struct Streamed {
+    /// The occupancy grid of the level scans (`None`: nothing to draw).
+    pub grid: Option<robot::localization::OccupancyGrid>,
+    /// The bytes of `scans.jsonl`.
+    pub scan_lines: Vec<u8>,
 }
 
 /// What the localisation made of a run's scans.

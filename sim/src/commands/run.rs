@@ -4,7 +4,7 @@
 use super::reconstruct::{SceneInput, reconstruct};
 use crate::config::scenario::SonarSettings;
 use crate::config::{ConfigError, Scenario};
-use crate::output::GridStream;
+use crate::output::ScanStream;
 use crate::record::DecisionRecord;
 use crate::record::{LocalisationRecord, RunRecord, ScanRecord, SonarRecord};
 use crate::twin::sim_robot::{GroundTruth, SimError, SimRobot};
@@ -54,10 +54,10 @@ pub struct RunOptions {
     pub tour: Option<TourConfig>,
     /// Publishes the run live, paced to the wall clock.
     pub live: Option<Live>,
-    /// Builds the occupancy grid of `map.pgm` on a thread of its own as the scans come
-    /// ([`crate::output::GridStream`]), into [`RunRecord::grid`]: the map is ready when the
-    /// simulation ends (`twin run` does; runs whose files are not written need not).
-    pub stream_grid: bool,
+    /// Builds `map.pgm`'s grid and `scans.jsonl`'s lines on a thread of their own as the scans
+    /// come ([`ScanStream`]), into [`RunRecord::streamed`]: they are ready when the simulation
+    /// ends (`twin run` does; runs whose files are not written need not).
+    pub stream: bool,
 }
 
 /// A run published live (`twin run --live`): its topics on a Foxglove WebSocket server, the
@@ -186,7 +186,7 @@ pub fn control<R>(
     robot: &mut R,
     scenario: &Scenario,
     options: &RunOptions,
-    mut grid: Option<&mut GridStream>,
+    mut stream: Option<&mut ScanStream>,
     ready: impl FnOnce(&mut R) -> Result<(), R::Error>,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<Controlled, TourError<R::Error>>
@@ -230,7 +230,7 @@ where
         published_estimates: 0,
         kept: &mut kept,
         decisions: &mut decisions,
-        grid: grid.as_deref_mut(),
+        stream: stream.as_deref_mut(),
         gridded: &mut gridded,
     };
     let report = run_tour(
@@ -251,8 +251,8 @@ where
     let localisation = localiser.map(|localiser| {
         let matcher = localiser.kind();
         let (placed, map) = localiser.finish();
-        if let Some(grid) = grid {
-            grid_placed(grid, &placed[gridded.min(placed.len())..], &kept);
+        if let Some(stream) = stream {
+            grid_placed(stream, &placed[gridded.min(placed.len())..], &kept);
         }
         LocalisationRecord {
             matcher,
@@ -283,17 +283,18 @@ struct Watcher<'a, P> {
     published_estimates: usize,
     kept: &'a mut Vec<Kept>,
     decisions: &'a mut Vec<DecisionRecord>,
-    /// The grid built as the scans come, if any, and how many placed scans it was given.
-    grid: Option<&'a mut GridStream>,
+    /// The files built as the scans come, if any, and how many placed scans their grid was
+    /// given.
+    stream: Option<&'a mut ScanStream>,
     gridded: &'a mut usize,
 }
 
-/// Gives `grid` the scans of `placed`, each at its estimate (its scan found in `kept` by its
-/// stamp): the grid of a run that localises.
-fn grid_placed(grid: &mut GridStream, placed: &[robot::localization::Placed], kept: &[Kept]) {
+/// Gives `stream`'s grid the scans of `placed`, each at its estimate (its scan found in `kept`
+/// by its stamp): the grid of a run that localises.
+fn grid_placed(stream: &mut ScanStream, placed: &[robot::localization::Placed], kept: &[Kept]) {
     for p in placed {
         if let Ok(i) = kept.binary_search_by_key(&p.stamp, |k| k.0.stamp) {
-            grid.push(&kept[i].0, p.estimate);
+            stream.grid(&kept[i].0, p.estimate);
         }
     }
 }
@@ -324,15 +325,16 @@ impl<P: FnMut(usize, usize)> TourObserver for Watcher<'_, P> {
                     self.published_estimates = placed.len();
                 }
                 self.kept.push((scan.clone(), odometry, scene));
-                if let Some(grid) = self.grid.as_deref_mut() {
+                if let Some(stream) = self.stream.as_deref_mut() {
+                    stream.kept(scan, odometry, scene);
                     match &self.localiser {
                         Some(localiser) => {
                             let placed = localiser.placed();
                             let new = &placed[(*self.gridded).min(placed.len())..];
-                            grid_placed(grid, new, self.kept);
+                            grid_placed(stream, new, self.kept);
                             *self.gridded = placed.len();
                         }
-                        None if scene.is_none() => grid.push(scan, odometry),
+                        None if scene.is_none() => stream.grid(scan, odometry),
                         None => {}
                     }
                 }
@@ -394,14 +396,14 @@ pub fn run_scenario(
             }
         });
     }
-    let mut grid = options
-        .stream_grid
-        .then(|| GridStream::start(scenario.robot.mount()));
+    let mut stream = options
+        .stream
+        .then(|| ScanStream::start(scenario.robot.mount()));
     let controlled = control(
         &mut taped,
         &scenario,
         options,
-        grid.as_mut(),
+        stream.as_mut(),
         |r| r.inner_mut().wait_pan_tilt_ready(),
         progress,
     )
@@ -493,7 +495,7 @@ pub fn run_scenario(
         reconstruction,
         tape,
         decisions,
-        grid: grid.map(GridStream::finish),
+        streamed: stream.map(ScanStream::finish),
     })
 }
 
@@ -652,7 +654,7 @@ pub fn main(args: RunArgs) -> Result<(), super::CommandError> {
     let options = RunOptions {
         seed: args.seed,
         live: live.clone(),
-        stream_grid: true,
+        stream: true,
         ..RunOptions::default()
     };
     let record = run_scenario(&scenario, &options, |done, _| bar.set_position(done as u64))?;

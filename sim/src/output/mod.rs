@@ -15,6 +15,7 @@ mod reconstruction;
 mod render;
 mod scans;
 mod sonar;
+mod stream;
 mod summary;
 mod svg;
 mod tilted;
@@ -23,7 +24,7 @@ mod world_json;
 pub use world_json::write_world_json;
 
 use grid::grid_scan;
-pub use grid::{GridStream, write_grid};
+pub use grid::write_grid;
 pub use mcap::{
     RecordedScan, Recording, estimate_msg, head_transforms, no_scan, scan_msg, scan_topics,
     static_transforms, write_mcap,
@@ -36,6 +37,7 @@ pub use reconstruction::{
 pub use render::{Picture, write_model_png};
 pub use scans::{ScanLine, read_scan_lines, write_scan_lines, write_scans};
 pub use sonar::write_sonar;
+pub use stream::ScanStream;
 
 /// Writes what the navigating steps decided, one JSON object a line: the stamp `t` (s), the
 /// `estimate` steered by and the `odometry` (x, y m, heading rad), and the `decision` — a
@@ -212,8 +214,8 @@ pub fn write_all(record: &RunRecord, scenario: &Scenario, dir: &Path) -> std::io
             write_mcap(&path("run.mcap"), &recording(record, scenario))
                 .map(|_| vec![path("run.mcap")])
         });
-        let grid = s.spawn(|| match &record.grid {
-            Some(built) => grid::write_grid_files(dir, built.as_ref()),
+        let grid = s.spawn(|| match &record.streamed {
+            Some(built) => grid::write_grid_files(dir, built.grid.as_ref()),
             None => write_grid(
                 dir,
                 level_scans(record, scenario).iter().map(|(p, s)| (*p, s)),
@@ -241,7 +243,10 @@ pub fn write_all(record: &RunRecord, scenario: &Scenario, dir: &Path) -> std::io
                 )?;
             }
             files.push(path("scans.jsonl"));
-            write_scans(&path("scans.jsonl"), &record.scans, &scenario.robot.mount())?;
+            match &record.streamed {
+                Some(built) => std::fs::write(path("scans.jsonl"), &built.scan_lines)?,
+                None => write_scans(&path("scans.jsonl"), &record.scans, &scenario.robot.mount())?,
+            }
             files.push(path("summary.json"));
             Summary::of(record, (&scenario.world.name, &scenario.robot.name))
                 .write(&path("summary.json"))?;

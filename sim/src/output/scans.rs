@@ -206,11 +206,22 @@ pub fn write_scans(path: &Path, records: &[ScanRecord], mount: &LaserMount) -> s
 pub fn write_scan_lines(path: &Path, lines: impl Iterator<Item = ScanLine>) -> std::io::Result<()> {
     let mut out = BufWriter::new(std::fs::File::create(path)?);
     for line in lines {
-        let mut json = serde_json::Serializer::with_formatter(&mut out, Millimetres);
-        line.serialize(&mut json)?;
-        out.write_all(b"\n")?;
+        write_scan_line(&mut out, &line)?;
     }
     out.flush()
+}
+
+/// One line of `scans.jsonl`, its newline included.
+fn write_scan_line(out: &mut impl Write, line: &ScanLine) -> std::io::Result<()> {
+    let mut json = serde_json::Serializer::with_formatter(&mut *out, Millimetres);
+    line.serialize(&mut json)?;
+    out.write_all(b"\n")
+}
+
+/// [`write_scan_lines`]'s bytes for `line`, appended to `out`.
+pub(super) fn push_scan_line(out: &mut Vec<u8>, line: &ScanLine) {
+    // Serialising numbers and strings into memory cannot fail.
+    let _ = write_scan_line(out, line);
 }
 
 /// serde_json's compact output, with a fast path for the numbers that fill a scan line — whole

@@ -154,6 +154,45 @@ impl SurfaceIndex {
         (d2.sqrt(), id)
     }
 
+    /// Whether a surface lies at most `r` from `p`: `nearest(p).0 <= r`, to the last bit, with
+    /// a look at `p`'s own cell only when `r` is within the cells' reach (the question a ghost
+    /// test asks of every point: a ghost far from everything costs no search outwards).
+    pub(super) fn within(
+        &self,
+        p: [f64; 3],
+        r: f64,
+        faces: &[Face],
+        caps: &[Cap],
+        ceiling: f64,
+    ) -> bool {
+        // The square root of each squared distance, as `nearest` takes it of the least one
+        // (the root is monotonic, so the least root is the root of the least).
+        let near = |d2: f64| d2.sqrt() <= r;
+        if near(p[2] * p[2]) || near((ceiling - p[2]) * (ceiling - p[2])) {
+            return true;
+        }
+        let cell_of = |x: f64, k: usize| {
+            let u = (x - self.origin[k]) / self.cell;
+            (u >= 0.0 && u < self.size[k] as f64).then_some(u as usize)
+        };
+        let (Some(i), Some(j)) = (cell_of(p[0], 0), cell_of(p[1], 1)) else {
+            // Off the plan (or not a number): the full search.
+            return self.nearest(p, faces, caps, ceiling).0 <= r;
+        };
+        if r > self.reach {
+            return self.nearest(p, faces, caps, ceiling).0 <= r;
+        }
+        // A surface within `r` of `p` is within the reach of `p`'s cell, so the cell lists it.
+        let k = j * self.size[0] + i;
+        self.items[self.starts[k] as usize..self.starts[k + 1] as usize]
+            .iter()
+            .any(|&id| match id {
+                SurfaceId::Face(n) => near(faces[n as usize].distance2(p)),
+                SurfaceId::Cap(n) => near(caps[n as usize].distance2(p)),
+                SurfaceId::Floor | SurfaceId::Ceiling => false,
+            })
+    }
+
     /// Distance in the plan from `p` to the nearest face's segment (heights and caps ignored),
     /// and that face; infinite (and the floor) for a world without faces.
     pub(super) fn nearest_face_in_plan(&self, p: [f64; 2], faces: &[Face]) -> (f64, SurfaceId) {
@@ -298,6 +337,10 @@ mod tests {
                 .sqrt();
             let (d, _) = map.nearest_surface(p);
             assert_eq!(d, brute, "at {p:?}");
+            // The bounded question answers as the distance does, at and beyond the reach.
+            for r in [0.0, 0.05, 0.15, 0.25, 0.6, brute] {
+                assert_eq!(map.within_3d(p, r), brute <= r, "within {r} at {p:?}");
+            }
             // The plan's clearance (faces only, heights ignored) through the same grid.
             let plan = faces
                 .iter()

@@ -105,7 +105,7 @@ impl PointKind {
     /// What the world point `p` is: farther than 15 cm from every surface is a ghost, lower
     /// than 3 cm is the floor.
     pub fn of(map: &WorldMap, p: [f64; 3]) -> Self {
-        if map.distance_3d(p) > GHOST_MARGIN {
+        if !map.within_3d(p, GHOST_MARGIN) {
             PointKind::Ghost
         } else if p[2] < FLOOR_BAND {
             PointKind::Floor
@@ -404,6 +404,13 @@ impl WorldMap {
     /// Distance from `p` to the nearest surface in 3D — faces, caps, floor and ceiling.
     pub fn distance_3d(&self, p: [f64; 3]) -> f64 {
         self.nearest_surface(p).0
+    }
+
+    /// Whether a surface lies at most `r` metres from `p` in 3D: `distance_3d(p) <= r`, to the
+    /// last bit, answered from `p`'s cell of the plan's grid when `r` is small.
+    pub fn within_3d(&self, p: [f64; 3], r: f64) -> bool {
+        self.index
+            .within(p, r, &self.faces, &self.caps, self.ceiling)
     }
 
     /// The surface nearest to `p` in 3D and its distance, through the plan's grid.
