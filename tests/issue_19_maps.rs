@@ -408,9 +408,9 @@ fn a_bad_map_table_names_its_field() {
     }
 }
 
-/// `twin run` builds the occupancy grid and the scans' lines on a thread of their own while the
-/// simulation goes on; the files it writes are, byte for byte, the ones built from the run's
-/// record afterwards — with the estimate (lab tour), by odometry (glass door), with scenes left
+/// `twin run` builds the occupancy grid, the scans' lines and the tape's JSON on a thread of
+/// their own while the simulation goes on; the files it writes are, byte for byte, the ones
+/// built from the run's record afterwards — with the estimate (lab tour), by odometry (glass door), with scenes left
 /// out (scene lab) and with the laser on the pan-tilt (thesis tour), across seeds.
 #[test]
 fn the_files_built_during_a_run_are_the_files_built_after_it() {
@@ -437,7 +437,7 @@ fn the_files_built_during_a_run_are_the_files_built_after_it() {
         );
         sim::output::write_all(&streamed, &scenario(name), &a).unwrap();
         sim::output::write_all(&after, &scenario(name), &b).unwrap();
-        for file in ["map.pgm", "map.yaml", "scans.jsonl"] {
+        for file in ["map.pgm", "map.yaml", "scans.jsonl", "run.mcap"] {
             let (x, y) = (std::fs::read(a.join(file)), std::fs::read(b.join(file)));
             assert!(x.is_ok(), "{name}: {file} written");
             assert!(x.ok() == y.ok(), "{name} seed {seed}: {file} differs");

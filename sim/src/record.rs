@@ -94,6 +94,8 @@ pub struct Streamed {
     pub grid: Option<robot::localization::OccupancyGrid>,
     /// The bytes of `scans.jsonl`.
     pub scan_lines: Vec<u8>,
+    /// Each exchange of the tape as JSON, in the tape's order (`run.mcap`'s `/hardware/tape`).
+    pub tape_json: Vec<String>,
 }
 
 /// What the localisation made of a run's scans.

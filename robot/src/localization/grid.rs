@@ -403,10 +403,16 @@ impl OccupancyGrid {
     }
 
     fn cell(&self, i: usize) -> Cell {
-        let p = 1.0 - 1.0 / (1.0 + f64::from(self.log_odds[i]).exp());
-        if self.log_odds[i] == 0.0 {
-            Cell::Unknown
-        } else if p >= self.config.occupied_thresh {
+        self.kind(self.log_odds[i])
+    }
+
+    /// What a cell of log-odds `l` is.
+    fn kind(&self, l: f32) -> Cell {
+        if l == 0.0 {
+            return Cell::Unknown;
+        }
+        let p = 1.0 - 1.0 / (1.0 + f64::from(l).exp());
+        if p >= self.config.occupied_thresh {
             Cell::Occupied
         } else if p <= self.config.free_thresh {
             Cell::Free
@@ -432,14 +438,21 @@ impl OccupancyGrid {
             self.config.resolution_m, self.width, self.height
         )
         .into_bytes();
+        // Log-odds are sums of a few steps, so neighbours often hold the same value: the last
+        // one's kind is kept instead of taking an exponential per cell.
+        let mut last = (f32::NAN, Cell::Unknown);
         for y in (0..self.height).rev() {
-            out.extend(
-                (0..self.width).map(|x| match self.cell(y * self.width + x) {
+            let row = &self.log_odds[y * self.width..(y + 1) * self.width];
+            out.extend(row.iter().map(|&l| {
+                if l.to_bits() != last.0.to_bits() {
+                    last = (l, self.kind(l));
+                }
+                match last.1 {
                     Cell::Occupied => 0u8,
                     Cell::Free => 254,
                     Cell::Unknown => 205,
-                }),
-            );
+                }
+            }));
         }
         out
     }
@@ -478,6 +491,24 @@ mod tests {
         assert!(pgm.starts_with(b"P5\n"));
         assert!(pgm.len() > w * h && pgm.ends_with(&[205]));
         assert!(grid.yaml("map.pgm").contains("origin: ["));
+        // Each pixel is its cell's kind (rows from the top), as `cell` tells it.
+        let pixels = &pgm[pgm.len() - w * h..];
+        let mut kinds = [0usize; 3];
+        for y in 0..h {
+            for x in 0..w {
+                let (want, kind) = match grid.cell(y * w + x) {
+                    Cell::Occupied => (0, 0),
+                    Cell::Free => (254, 1),
+                    Cell::Unknown => (205, 2),
+                };
+                assert_eq!(pixels[(h - 1 - y) * w + x], want, "cell {x}, {y}");
+                kinds[kind] += 1;
+            }
+        }
+        assert!(
+            kinds.iter().all(|&n| n > 0),
+            "all three kinds drawn: {kinds:?}"
+        );
     }
 
     #[test]

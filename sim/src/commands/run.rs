@@ -381,11 +381,24 @@ pub fn run_scenario(
         scenario.seed = seed;
     }
     let mut taped = Taped::new(SimRobot::from_scenario(&scenario)?);
-    if let Some(live) = &options.live {
-        // The truth at each scan, noted as the scan comes back, for the live view.
-        let truths = std::sync::Arc::clone(&live.truths);
+    let mut stream = options
+        .stream
+        .then(|| ScanStream::start(scenario.robot.mount()));
+    // The tape's exchanges to the stream, as they are noted; and for the live view, the truth
+    // at each scan, noted as the scan comes back.
+    let tape = stream.as_ref().map(ScanStream::tape_feed);
+    let truths = options
+        .live
+        .as_ref()
+        .map(|live| std::sync::Arc::clone(&live.truths));
+    if tape.is_some() || truths.is_some() {
         taped = taped.with_hook(move |twin: &SimRobot, exchange| {
-            if let robot::replay::Answer::Scan { scan: Some(scan) } = &exchange.answer {
+            if let Some(tape) = &tape {
+                tape.exchange(exchange);
+            }
+            if let (Some(truths), robot::replay::Answer::Scan { scan: Some(scan) }) =
+                (&truths, &exchange.answer)
+            {
                 let truth = twin
                     .true_pose_at(scan.stamp)
                     .unwrap_or_else(|| twin.true_pose());
@@ -396,9 +409,6 @@ pub fn run_scenario(
             }
         });
     }
-    let mut stream = options
-        .stream
-        .then(|| ScanStream::start(scenario.robot.mount()));
     let controlled = control(
         &mut taped,
         &scenario,

@@ -60,6 +60,8 @@ pub struct Recording<'a> {
     pub link_events: Vec<(Stamp, String, String)>,
     /// The controller's calls through the hardware contract and their answers, for a replay.
     pub tape: &'a [robot::replay::Exchange],
+    /// The same as JSON, one string per exchange, when already written (else written here).
+    pub tape_json: Option<&'a [String]>,
 }
 
 /// Writes `recording` to `path`; returns the number of messages written.
@@ -271,14 +273,23 @@ fn write(path: &Path, r: &Recording) -> Result<u32, robot::logs::mcap::RecordErr
     }
     // The tape, each exchange at its answer's stamp (or the last stamp before it).
     let mut at = Stamp::ZERO;
-    for exchange in r.tape {
+    let written = r.tape_json.filter(|json| json.len() == r.tape.len());
+    for (i, exchange) in r.tape.iter().enumerate() {
         at = exchange.stamp().map_or(at, |s| s.max(at));
-        let json = serde_json::to_string(exchange).expect("an exchange serialises");
+        let json = match written {
+            Some(json) => json[i].clone(),
+            None => tape_json(exchange),
+        };
         rec.write(robot::logs::mcap::TAPE_TOPIC, at, &StringMsg(json))?;
     }
     let n = rec.messages();
     rec.finish()?;
     Ok(n)
+}
+
+/// An exchange of the tape as `/hardware/tape` carries it.
+pub(super) fn tape_json(exchange: &robot::replay::Exchange) -> String {
+    serde_json::to_string(exchange).expect("an exchange serialises")
 }
 
 /// A scan of no beams: the example a live view announces `/scan` with before the first one.

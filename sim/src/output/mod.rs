@@ -117,6 +117,7 @@ fn recording<'a>(record: &'a RunRecord, scenario: &Scenario) -> Recording<'a> {
         }),
         link_events: Vec::new(),
         tape: &record.tape,
+        tape_json: record.streamed.as_ref().map(|s| s.tape_json.as_slice()),
     }
 }
 

@@ -1,8 +1,9 @@
 //! The files a run can write while it goes on: a thread of its own takes each scan as the tour
-//! keeps it and builds `map.pgm`'s occupancy grid and `scans.jsonl`'s lines, so they are ready
-//! when the simulation ends instead of starting then. The same bytes, to the last one, as the
-//! files written from the run's record afterwards: the same scans reach the same builders in the
-//! same order.
+//! keeps it, and each exchange through the hardware contract as the tape notes it, and builds
+//! `map.pgm`'s occupancy grid, `scans.jsonl`'s lines and the tape's JSON for `run.mcap`, so they
+//! are ready when the simulation ends instead of starting then. The same bytes, to the last one,
+//! as those built from the run's record afterwards: the same items reach the same builders in
+//! the same order.
 
 use super::grid::grid_pose;
 use super::scans::{ScanLine, push_scan_line};
@@ -12,6 +13,9 @@ use robot::control::SceneTag;
 use robot::hardware::LaserScan;
 use robot::localization::{GridBuilder, GridConfig, RangeScan};
 use robot::mount::LaserMount;
+use robot::replay::Exchange;
+use std::sync::mpsc::Sender;
+use std::sync::{Arc, Mutex};
 
 /// What the run hands over.
 #[derive(Debug)]
@@ -21,29 +25,70 @@ enum Item {
     Kept(LaserScan, Pose2, Option<SceneTag>),
     /// A level scan seen from the laser pose in the map: into the grid.
     Grid(Pose2, LaserScan),
+    /// An exchange the tape noted: its JSON.
+    Tape(Box<Exchange>),
+    /// The run is over.
+    End,
 }
 
 /// Items handed over at once, so the run wakes the builder a few dozen times, not at every
 /// scan.
 const BATCH: usize = 32;
 
+/// Where the run's items go: the batch being filled and the builder's end of the channel,
+/// shared by the tour's observer and the tape's hook (both on the simulation's thread, one after
+/// the other, so the items keep the order they happened in).
+#[derive(Clone, Debug)]
+struct Feed(Arc<Mutex<Pending>>);
+
+/// The items not yet handed over, and the channel to the builder.
+type Pending = (Vec<Item>, Sender<Vec<Item>>);
+
+impl Feed {
+    fn hand(&self, item: Item) {
+        let mut feed = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        feed.0.push(item);
+        if feed.0.len() >= BATCH {
+            Self::hand_over(&mut feed);
+        }
+    }
+
+    /// Sends the batch to the builder. It only stops at [`Item::End`] (or when it panicked,
+    /// which [`ScanStream::finish`] tells), so a send cannot fail before.
+    fn hand_over(feed: &mut Pending) {
+        let batch = std::mem::replace(&mut feed.0, Vec::with_capacity(BATCH));
+        let _ = feed.1.send(batch);
+    }
+}
+
 /// The builder of a run's streamed files, on its own thread.
 #[derive(Debug)]
 pub struct ScanStream {
     mount: LaserMount,
-    batch: Vec<Item>,
-    feed: std::sync::mpsc::Sender<Vec<Item>>,
+    feed: Feed,
     builder: std::thread::JoinHandle<Streamed>,
+}
+
+/// The tape's side of a [`ScanStream`]: give it each exchange as the tape notes it
+/// (`robot::replay::Taped::with_hook`).
+#[derive(Clone, Debug)]
+pub struct TapeFeed(Feed);
+
+impl TapeFeed {
+    /// An exchange the tape noted, in the tape's order.
+    pub fn exchange(&self, exchange: &Exchange) {
+        self.0.hand(Item::Tape(Box::new(exchange.clone())));
+    }
 }
 
 impl ScanStream {
     /// Starts the builder for a laser on `mount`.
     pub fn start(mount: LaserMount) -> Self {
         let (feed, batches) = std::sync::mpsc::channel::<Vec<Item>>();
-        let on_thread = mount.clone();
+        let on_thread = mount;
         let builder = std::thread::spawn(move || {
             let mut grid = GridBuilder::new(GridConfig::default());
-            let mut scan_lines = Vec::new();
+            let (mut scan_lines, mut tape_json) = (Vec::new(), Vec::new());
             for item in batches.into_iter().flatten() {
                 match item {
                     Item::Kept(scan, odometry, scene) => push_scan_line(
@@ -53,19 +98,26 @@ impl ScanStream {
                     Item::Grid(laser, scan) => {
                         grid.push(laser, &RangeScan::from(&scan));
                     }
+                    Item::Tape(exchange) => tape_json.push(super::mcap::tape_json(&exchange)),
+                    Item::End => break,
                 }
             }
             Streamed {
                 grid: grid.finish(),
                 scan_lines,
+                tape_json,
             }
         });
         ScanStream {
             mount,
-            batch: Vec::with_capacity(BATCH),
-            feed,
+            feed: Feed(Arc::new(Mutex::new((Vec::with_capacity(BATCH), feed)))),
             builder,
         }
+    }
+
+    /// The feed for the tape's hook.
+    pub fn tape_feed(&self) -> TapeFeed {
+        TapeFeed(self.feed.clone())
     }
 
     /// A scan the tour kept, with the odometry at its stamp and its scene, in the order kept.
@@ -82,23 +134,17 @@ impl ScanStream {
     }
 
     fn hand(&mut self, item: Item) {
-        self.batch.push(item);
-        if self.batch.len() == BATCH {
-            self.hand_over();
+        self.feed.hand(item);
+    }
+
+    /// Everything built from the items handed over, once the builder is done (a tape feed
+    /// still held elsewhere hands nothing more to it).
+    pub fn finish(self) -> Streamed {
+        {
+            let mut feed = self.feed.0.lock().unwrap_or_else(|e| e.into_inner());
+            feed.0.push(Item::End);
+            Feed::hand_over(&mut feed);
         }
-    }
-
-    /// Sends the batch to the builder. It only stops when the feed closes (or when it
-    /// panicked, which [`ScanStream::finish`] tells), so a send cannot fail before.
-    fn hand_over(&mut self) {
-        let batch = std::mem::replace(&mut self.batch, Vec::with_capacity(BATCH));
-        let _ = self.feed.send(batch);
-    }
-
-    /// Everything built from the scans handed over, once the builder is done.
-    pub fn finish(mut self) -> Streamed {
-        self.hand_over();
-        drop(self.feed);
         self.builder
             .join()
             .unwrap_or_else(|panic| std::panic::resume_unwind(panic))

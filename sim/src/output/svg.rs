@@ -471,12 +471,29 @@ impl HalfPixels {
     }
 }
 
+/// Writes `n` in decimal, as `{}` does, without the formatter's machinery (a picture writes
+/// hundreds of thousands of them).
+fn push_whole(s: &mut String, mut n: u64) {
+    let mut digits = [0u8; 20];
+    let mut at = digits.len();
+    loop {
+        at -= 1;
+        digits[at] = b'0' + (n % 10) as u8;
+        n /= 10;
+        if n == 0 {
+            break;
+        }
+    }
+    // Only ASCII digits were written.
+    s.push_str(core::str::from_utf8(&digits[at..]).unwrap_or_default());
+}
+
 /// Writes `halves / 2` with one decimal only when it is not whole ("12", "12.5").
 fn push_halves(s: &mut String, halves: i64) {
     if halves < 0 {
         s.push('-');
     }
-    let _ = write!(s, "{}", halves.unsigned_abs() / 2);
+    push_whole(s, halves.unsigned_abs() / 2);
     if halves % 2 != 0 {
         s.push_str(".5");
     }
@@ -499,7 +516,7 @@ pub(super) fn push_tenths(s: &mut String, x: f64) {
         s.push('-');
     }
     let n = tenths.unsigned_abs();
-    let _ = write!(s, "{}", n / 10);
+    push_whole(s, n / 10);
     s.push('.');
     s.push(char::from(b'0' + (n % 10) as u8));
 }
@@ -604,6 +621,28 @@ mod tests {
             let mut s = String::new();
             push_tenths(&mut s, x);
             assert_eq!(s, format!("{x:.1}"), "{x:e}");
+        }
+    }
+
+    #[test]
+    fn whole_numbers_and_halves_are_written_as_the_formatter_writes_them() {
+        let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(9);
+        let mut values: Vec<i64> =
+            vec![0, 1, -1, 2, -2, 9, 10, 19, 20, 99, 100, i64::MAX, i64::MIN];
+        values.extend((0..100_000).map(|_| rng.random::<i64>() >> rng.random_range(0..63)));
+        for h in values {
+            let mut s = String::new();
+            push_halves(&mut s, h);
+            let whole = format!("{}{}", if h < 0 { "-" } else { "" }, h.unsigned_abs() / 2);
+            let want = if h % 2 != 0 {
+                format!("{whole}.5")
+            } else {
+                whole
+            };
+            assert_eq!(s, want, "{h}");
+            let mut n = String::new();
+            push_whole(&mut n, h.unsigned_abs());
+            assert_eq!(n, h.unsigned_abs().to_string());
         }
     }
 }
