@@ -48,17 +48,17 @@ impl ScanMatcher for LeastSquares {
         let mut pose = guess;
         let mut moved = Vec::with_capacity(current.len());
         let mut result = MatchResult::unmatched(guess);
-        let mut hints = vec![None; current.len()];
+        // Each point's last nearest reference point (the search skipped while it cannot change).
+        let mut last = vec![None; current.len()];
         for iteration in 1..=self.convergence.max_iterations {
             transform_all(&pose, &current.xy, &mut moved);
             // Sums for the closed form: centroids and cross terms of the pairs.
             let (mut n, mut sp, mut sq) = (0usize, [0.0; 2], [0.0; 2]);
             let mut pairs = Vec::with_capacity(moved.len());
             for (i, p) in moved.iter().enumerate() {
-                let Some((j, d2)) = reference.tree.nearest_from(*p, hints[i]) else {
+                let Some((j, d2)) = reference.tree.nearest_cached(*p, &mut last[i]) else {
                     continue;
                 };
-                hints[i] = Some(j);
                 if d2 <= gate {
                     let q = reference.points.xy[j];
                     pairs.push((*p, q));

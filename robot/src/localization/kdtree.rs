@@ -73,6 +73,105 @@ impl KdTree {
         })
     }
 
+    /// [`nearest_from`](Self::nearest_from) for a query that moves little from one call to the
+    /// next (a point of a scan being aligned, from one iteration to the next): the same answer,
+    /// to the last bit, without a search while the query stays so near where it was last
+    /// searched that no other point can have come nearer. `last` holds what that search found;
+    /// start it as `None`, and give each query its own.
+    pub fn nearest_cached(
+        &self,
+        q: [f64; 2],
+        last: &mut Option<LastNearest>,
+    ) -> Option<(usize, f64)> {
+        if let Some(c) = last {
+            let (mx, my) = (q[0] - c.query[0], q[1] - c.query[1]);
+            if mx * mx + my * my < c.reach2 {
+                // Still the unique nearest point: its squared distance as the search takes it.
+                let p = self.original[c.index];
+                let (dx, dy) = (p[0] - q[0], p[1] - q[1]);
+                return Some((c.index, dx * dx + dy * dy));
+            }
+        }
+        let hint = last.map(|c| c.index);
+        let mut best = match hint.and_then(|h| self.original.get(h).map(|&p| (h, p))) {
+            Some((h, p)) => {
+                let (dx, dy) = (p[0] - q[0], p[1] - q[1]);
+                (h, dx * dx + dy * dy)
+            }
+            None => (usize::MAX, f64::INFINITY),
+        };
+        let mut others = f64::INFINITY;
+        if self.points.is_empty() {
+            return None;
+        }
+        self.search_bounded(0, self.points.len(), q, &mut best, &mut others);
+        if best.0 == usize::MAX {
+            return None; // (only without a hint: `last` was `None`)
+        }
+        // Every other point is at least √others from q, the answer √d² from it: while q moves
+        // less than half the difference, nothing can overtake the answer. A nanometre and a
+        // relative 10⁻¹² are kept back for the roundings of the squared distances.
+        let (near, far) = (best.1.sqrt(), others.sqrt());
+        let reach = 0.5 * (far - near) - 1e-9 - 1e-12 * far;
+        *last = Some(LastNearest {
+            query: q,
+            index: best.0,
+            reach2: if reach > 0.0 { reach * reach } else { 0.0 },
+        });
+        Some(best)
+    }
+
+    /// [`search`](Self::search) by Euclidean distance, visiting the same nodes in the same order
+    /// (so it finds the same point), that also keeps in `others` a lower bound on the squared
+    /// distance from `q` of every point but the best: the other points it measured, and the
+    /// squared gap to each range it did not enter.
+    fn search_bounded(
+        &self,
+        lo: usize,
+        hi: usize,
+        q: [f64; 2],
+        best: &mut (usize, f64),
+        others: &mut f64,
+    ) {
+        let visit = |k: usize, best: &mut (usize, f64), others: &mut f64| {
+            let original = self.index[k] as usize;
+            let p = self.points[k];
+            let (dx, dy) = (p[0] - q[0], p[1] - q[1]);
+            let d = dx * dx + dy * dy;
+            if original == best.0 {
+                return; // the hint, met again in the tree
+            }
+            if d < best.1 {
+                *others = others.min(best.1);
+                *best = (original, d);
+            } else {
+                *others = others.min(d);
+            }
+        };
+        if hi - lo <= LEAF {
+            for k in lo..hi {
+                visit(k, best, others);
+            }
+            return;
+        }
+        let mid = (lo + hi) / 2;
+        let a = usize::from(self.axis[mid]);
+        let gap = q[a] - self.points[mid][a];
+        visit(mid, best, others);
+        let (near, far) = if gap < 0.0 {
+            ((lo, mid), (mid + 1, hi))
+        } else {
+            ((mid + 1, hi), (lo, mid))
+        };
+        self.search_bounded(near.0, near.1, q, best, others);
+        if gap * gap < best.1 {
+            self.search_bounded(far.0, far.1, q, best, others);
+        } else if far.0 < far.1 {
+            // Every point beyond the splitting line is at least the gap away.
+            *others = others.min(gap * gap);
+        }
+    }
+
     /// The point minimising `metric(index, point)` (a squared distance), given that for any point
     /// on the far side of a splitting line at gap `g` from `q`, `metric >= bound_scale · g²`;
     /// the search starts from `hint` when given.
@@ -137,6 +236,17 @@ impl KdTree {
     }
 }
 
+/// What [`KdTree::nearest_cached`] found for a query the last time it searched.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct LastNearest {
+    /// The query searched for.
+    query: [f64; 2],
+    /// The nearest point's index in the caller's slice.
+    index: usize,
+    /// How far (squared) the query may move from there with that point staying the nearest.
+    reach2: f64,
+}
+
 fn build(points: &[[f64; 2]], order: &mut [u32], axis: &mut [u8]) {
     if order.len() <= LEAF {
         return;
@@ -198,6 +308,70 @@ mod tests {
             let p = points[i];
             assert_eq!((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2), d);
         }
+    }
+
+    /// Queries that walk in small and large steps, as a scan's points do while it is aligned,
+    /// over a scan-like arc, a grid with exact ties and repeated points: the cached search
+    /// answers what the search from the last answer does, index and squared distance to the
+    /// bit, and skips most searches on small steps.
+    #[test]
+    fn the_cached_search_answers_as_the_search_from_the_last_answer() {
+        let mut points = Vec::new();
+        for i in 0..361 {
+            let a = (i as f64 * 0.5 - 90.0).to_radians();
+            let r = 2.0 + (i as f64 * 0.37).sin();
+            points.push([r * a.cos(), r * a.sin()]);
+        }
+        for i in 0..20 {
+            for j in 0..7 {
+                points.push([i as f64 * 0.25 - 3.0, j as f64 * 0.5 - 1.0]);
+            }
+        }
+        points.extend_from_slice(&[[0.5, 0.5], [0.5, 0.5], [1.0, -1.0]]);
+        let tree = KdTree::new(&points);
+        let mut skipped = 0;
+        let mut total = 0;
+        for walk in 0..60 {
+            let mut q = [
+                (walk as f64 * 0.731).sin() * 4.0,
+                (walk as f64 * 1.37).cos() * 3.0,
+            ];
+            if walk % 10 == 0 {
+                q = [-3.0 + 0.125, 0.0]; // halfway between two grid points: a tie
+            }
+            let (mut last, mut hint) = (None, None);
+            for step in 0..200 {
+                // Shrinking steps (an alignment converging), then a jump now and then.
+                let size = if step % 50 == 49 {
+                    0.5
+                } else {
+                    0.05 / (1 + step % 50) as f64
+                };
+                let turn = (walk * 31 + step) as f64 * 0.618;
+                q = [q[0] + size * turn.cos(), q[1] + size * turn.sin()];
+                let before = last;
+                let cached = tree.nearest_cached(q, &mut last);
+                let searched = tree.nearest_from(q, hint);
+                assert_eq!(cached, searched, "walk {walk} step {step} at {q:?}");
+                hint = searched.map(|(j, _)| j);
+                total += 1;
+                if before.is_some() && before == last {
+                    skipped += 1;
+                }
+            }
+        }
+        assert!(skipped * 2 > total, "{skipped} of {total} searches skipped");
+        // Not a number: no skip, and the search's own answer.
+        let mut last = None;
+        let q = [0.4, 0.4];
+        let first = tree.nearest_cached(q, &mut last);
+        assert_eq!(first, tree.nearest_from(q, None));
+        let nan = [f64::NAN, 0.0];
+        assert_eq!(
+            tree.nearest_cached(nan, &mut last).map(|(j, _)| j),
+            tree.nearest_from(nan, first.map(|(j, _)| j))
+                .map(|(j, _)| j)
+        );
     }
 
     #[test]

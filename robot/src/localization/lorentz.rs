@@ -299,7 +299,9 @@ impl Lorentz {
         let mut moved = Vec::with_capacity(current.len());
         let mut sources = Vec::with_capacity(current.len());
         let mut targets = Vec::with_capacity(current.len());
-        let mut hints = vec![None; current.len()];
+        // Each point's last nearest reference point: the search is skipped while the point
+        // moves too little for another to come nearer (the same answers, sooner).
+        let mut last = vec![None; current.len()];
         let mut result = MatchResult::unmatched(guess);
         for &sigma in &self.sigmas_m {
             result.settled = false;
@@ -312,9 +314,8 @@ impl Lorentz {
                 for (i, p) in moved.iter().enumerate() {
                     let (j, d2) = reference
                         .tree
-                        .nearest_from(*p, hints[i])
+                        .nearest_cached(*p, &mut last[i])
                         .expect("non-empty reference");
-                    hints[i] = Some(j);
                     let mut target = reference.points.xy[j];
                     if let Some((lines, margin)) = lines
                         && let Some(line) = &lines[j]

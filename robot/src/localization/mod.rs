@@ -29,7 +29,7 @@ mod scan;
 
 pub use grid::{Cell, GridBuilder, GridConfig, OccupancyGrid};
 pub use icp::LeastSquares;
-pub use kdtree::KdTree;
+pub use kdtree::{KdTree, LastNearest};
 pub use level::{LEVEL_TOLERANCE_RAD, LevelLocaliser};
 pub use lorentz::{Lorentz, THESIS_SIGMAS};
 pub use map::{MapBuilder, MapConfig, MatchStats, Placed};
