@@ -83,6 +83,19 @@ impl KdTree {
         q: [f64; 2],
         last: &mut Option<LastNearest>,
     ) -> Option<(usize, f64)> {
+        let hint = last.map(|c| c.index);
+        self.nearest_cached_from(q, last, hint)
+    }
+
+    /// [`nearest_cached`](Self::nearest_cached) answering [`nearest_from`](Self::nearest_from)
+    /// with another `hint` (a neighbouring query's answer), which only decides between points
+    /// exactly as near: the search is skipped only when one point is nearest by a margin.
+    pub fn nearest_cached_from(
+        &self,
+        q: [f64; 2],
+        last: &mut Option<LastNearest>,
+        hint: Option<usize>,
+    ) -> Option<(usize, f64)> {
         if let Some(c) = last {
             let (mx, my) = (q[0] - c.query[0], q[1] - c.query[1]);
             if mx * mx + my * my < c.reach2 {
@@ -92,7 +105,6 @@ impl KdTree {
                 return Some((c.index, dx * dx + dy * dy));
             }
         }
-        let hint = last.map(|c| c.index);
         let mut best = match hint.and_then(|h| self.original.get(h).map(|&p| (h, p))) {
             Some((h, p)) => {
                 let (dx, dy) = (p[0] - q[0], p[1] - q[1]);
@@ -339,7 +351,7 @@ mod tests {
             if walk % 10 == 0 {
                 q = [-3.0 + 0.125, 0.0]; // halfway between two grid points: a tie
             }
-            let (mut last, mut hint) = (None, None);
+            let (mut last, mut hint, mut other) = (None, None, None);
             for step in 0..200 {
                 // Shrinking steps (an alignment converging), then a jump now and then.
                 let size = if step % 50 == 49 {
@@ -353,6 +365,13 @@ mod tests {
                 let cached = tree.nearest_cached(q, &mut last);
                 let searched = tree.nearest_from(q, hint);
                 assert_eq!(cached, searched, "walk {walk} step {step} at {q:?}");
+                // With another hint (a neighbour's answer): what the search from it answers.
+                let foreign = Some((walk * 7 + step * 13) % points.len());
+                assert_eq!(
+                    tree.nearest_cached_from(q, &mut other, foreign),
+                    tree.nearest_from(q, foreign),
+                    "walk {walk} step {step}, hint {foreign:?}"
+                );
                 hint = searched.map(|(j, _)| j);
                 total += 1;
                 if before.is_some() && before == last {

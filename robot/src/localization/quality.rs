@@ -18,6 +18,7 @@
 //! [`TrustRule`] turns these into the one flag a user of a match reads,
 //! [`MatchResult::converged`](super::MatchResult::converged).
 
+use super::kdtree::LastNearest;
 use super::matcher::{Reference, solve3};
 use crate::geometry::Pose2;
 
@@ -122,7 +123,7 @@ impl TrustRule {
         let mut information = [[0.0f64; 3]; 3];
         let mut gradient = [0.0f64; 3];
         let (mut inliers, mut sum2) = (0usize, 0.0f64);
-        for constraint in constraints(reference, current, pose) {
+        for constraint in constraints(reference, current, pose, None) {
             let distance = constraint.residual.abs();
             if distance > self.inlier_m {
                 continue;
@@ -178,10 +179,13 @@ pub fn polish(
     c: f64,
     gate: f64,
 ) -> Pose2 {
+    // Each point's last nearest reference point, kept from round to round: the pose moves
+    // little, and the search is skipped while no other point can have come nearer.
+    let mut last = vec![None; current.len()];
     for _ in 0..rounds {
         let mut h = [[0.0f64; 3]; 3];
         let mut g = [0.0f64; 3];
-        for constraint in constraints(reference, current, &pose) {
+        for constraint in constraints(reference, current, &pose, Some(&mut last)) {
             let e = constraint.residual;
             if let Some(jac) = constraint.jacobian
                 && e.abs() <= gate
@@ -209,19 +213,24 @@ struct Constraint {
     jacobian: Option<[f64; 3]>,
 }
 
-/// Each current point's [`Constraint`] at `pose`.
+/// Each current point's [`Constraint`] at `pose`; with `last`, each point's last nearest
+/// reference point is kept there (the same answers, searched less).
 fn constraints<'a>(
     reference: &'a Reference,
     current: &'a [[f64; 2]],
     pose: &Pose2,
+    mut last: Option<&'a mut [Option<LastNearest>]>,
 ) -> impl Iterator<Item = Constraint> + 'a {
     let (s, c) = pose.theta.sin_cos();
     let (x, y) = (pose.x, pose.y);
     let mut hint = None;
-    current.iter().filter_map(move |p| {
+    current.iter().enumerate().filter_map(move |(i, p)| {
         let r = [c * p[0] - s * p[1], s * p[0] + c * p[1]];
         let q = [x + r[0], y + r[1]];
-        let (j, d2) = reference.tree.nearest_from(q, hint)?;
+        let (j, d2) = match last.as_deref_mut().and_then(|last| last.get_mut(i)) {
+            Some(kept) => reference.tree.nearest_cached_from(q, kept, hint)?,
+            None => reference.tree.nearest_from(q, hint)?,
+        };
         hint = Some(j);
         Some(match surface_normal(&reference.points.xy, j) {
             Some(n) => {
