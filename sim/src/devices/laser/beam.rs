@@ -52,6 +52,26 @@ pub struct PreparedOptics {
     cos_black_lost: f64,
 }
 
+impl PreparedOptics {
+    /// The chance that a black surface met at incidence cosine `cos_in` returns the pulse:
+    /// certain within `black_full` of the normal, none beyond `black_lost`, falling linearly
+    /// with the angle between.
+    #[inline]
+    fn black_return(&self, cos_in: f64) -> f64 {
+        let optics = &self.optics;
+        let span = optics.black_lost - optics.black_full;
+        if cos_in >= self.cos_black_full {
+            1.0
+        } else if cos_in <= self.cos_black_lost {
+            0.0
+        } else if span > 0.0 {
+            ((optics.black_lost - cos_in.acos()) / span).clamp(0.0, 1.0)
+        } else {
+            f64::from(u8::from(cos_in.acos() < optics.black_full))
+        }
+    }
+}
+
 /// A round obstacle that moves: the robot's own body, a vertical cylinder from the floor, which
 /// reflected pulses can meet.
 #[derive(Copy, Clone, Debug, PartialEq)]
@@ -170,19 +190,24 @@ impl<'a> Pulses<'a> {
         hint: &mut Option<usize>,
         rng: &mut SimRng,
     ) -> Echo {
-        // Most beams end on the first surface, matte and not grazed: answered here, as the
-        // general path below would answer, without its call.
+        // Most beams end on the first surface, matte or black: answered here, as the general
+        // path below would answer (the same draw for a black one), without its call.
         if let Some(hit) = first
-            && hit.material == Material::Matte
+            && matches!(hit.material, Material::Matte | Material::Black)
             && self.others.is_empty()
             && self.max_range > 0.0
         {
             let n = hit.normal;
             let along = dir[0] * n[0] + dir[1] * n[1] + dir[2] * n[2];
-            return if (-along).clamp(-1.0, 1.0) <= self.prepared.cos_grazing {
+            let cos_in = (-along).clamp(-1.0, 1.0);
+            return if cos_in <= self.prepared.cos_grazing {
                 Echo::Lost
-            } else {
+            } else if hit.material == Material::Matte
+                || rng.random_bool(self.prepared.black_return(cos_in))
+            {
                 Echo::Range(hit.distance)
+            } else {
+                Echo::Lost
             };
         }
         self.follow(origin, dir, first, hint, rng)
@@ -239,17 +264,7 @@ impl<'a> Pulses<'a> {
             match contact.material {
                 Material::Matte => return Echo::Range(travelled),
                 Material::Black => {
-                    let span = optics.black_lost - optics.black_full;
-                    let p = if cos_in >= prepared.cos_black_full {
-                        1.0 // within `black_full` of the normal
-                    } else if cos_in <= prepared.cos_black_lost {
-                        0.0
-                    } else if span > 0.0 {
-                        ((optics.black_lost - cos_in.acos()) / span).clamp(0.0, 1.0)
-                    } else {
-                        f64::from(u8::from(cos_in.acos() < optics.black_full))
-                    };
-                    return if rng.random_bool(p) {
+                    return if rng.random_bool(prepared.black_return(cos_in)) {
                         Echo::Range(travelled)
                     } else {
                         Echo::Lost
@@ -517,7 +532,7 @@ points = [[1, -50], [1, 50]]
     /// answer, echo for echo and draw for draw: from random poses in the lab (matte, black,
     /// glass and metal walls), level and tilted, at every incidence, grazing included.
     #[test]
-    fn the_first_matte_surface_shortcut_answers_as_the_loop() {
+    fn the_first_surface_shortcut_answers_as_the_loop() {
         use rand::SeedableRng;
         let text = std::fs::read_to_string(
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../worlds/lab.toml"),
@@ -528,7 +543,7 @@ points = [[1, -50], [1, 50]]
         let pulses = Pulses::new(&m, None, 32.0);
         let (min, max) = world.bounds();
         let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(3);
-        let mut matte = 0;
+        let (mut matte, mut black) = (0, 0);
         for k in 0..20_000u64 {
             let origin = [
                 rng.random_range(min[0]..max[0]),
@@ -544,12 +559,14 @@ points = [[1, -50], [1, 50]]
             let dir = [a.cos() * e.cos(), a.sin() * e.cos(), e.sin()];
             let first = m.cast(origin, dir, 32.0);
             matte += usize::from(first.is_some_and(|h| h.material == Material::Matte));
+            black += usize::from(first.is_some_and(|h| h.material == Material::Black));
             let (mut r1, mut r2) = (crate::rng::substream(9, k), crate::rng::substream(9, k));
             let short = pulses.trace_near(origin, dir, first.as_ref(), &mut None, &mut r1);
             let long = pulses.follow(origin, dir, first.as_ref(), &mut None, &mut r2);
             assert_eq!(short, long, "from {origin:?} along {dir:?}");
             assert_eq!(r1.random::<u64>(), r2.random::<u64>(), "the same draws");
         }
-        assert!(matte > 5000, "{matte} beams ended on matte first");
+        assert!(matte > 5000, "{matte} beams met matte first");
+        assert!(black > 1000, "{black} beams met black first");
     }
 }
