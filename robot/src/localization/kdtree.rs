@@ -294,9 +294,8 @@ mod tests {
             .fold(f64::INFINITY, f64::min)
     }
 
-    #[test]
-    fn nearest_matches_brute_force() {
-        // A deterministic scatter: a scan-like arc plus a grid.
+    /// A deterministic scatter: a scan-like arc plus a grid whose columns are `column` apart.
+    fn arc_and_grid(column: f64) -> Vec<[f64; 2]> {
         let mut points = Vec::new();
         for i in 0..361 {
             let a = (i as f64 * 0.5 - 90.0).to_radians();
@@ -305,9 +304,15 @@ mod tests {
         }
         for i in 0..20 {
             for j in 0..7 {
-                points.push([i as f64 * 0.3 - 3.0, j as f64 * 0.5 - 1.0]);
+                points.push([i as f64 * column - 3.0, j as f64 * 0.5 - 1.0]);
             }
         }
+        points
+    }
+
+    #[test]
+    fn nearest_matches_brute_force() {
+        let points = arc_and_grid(0.3);
         let tree = KdTree::new(&points);
         for k in 0..500 {
             let q = [
@@ -328,17 +333,7 @@ mod tests {
     /// bit, and skips most searches on small steps.
     #[test]
     fn the_cached_search_answers_as_the_search_from_the_last_answer() {
-        let mut points = Vec::new();
-        for i in 0..361 {
-            let a = (i as f64 * 0.5 - 90.0).to_radians();
-            let r = 2.0 + (i as f64 * 0.37).sin();
-            points.push([r * a.cos(), r * a.sin()]);
-        }
-        for i in 0..20 {
-            for j in 0..7 {
-                points.push([i as f64 * 0.25 - 3.0, j as f64 * 0.5 - 1.0]);
-            }
-        }
+        let mut points = arc_and_grid(0.25);
         points.extend_from_slice(&[[0.5, 0.5], [0.5, 0.5], [1.0, -1.0]]);
         let tree = KdTree::new(&points);
         let mut skipped = 0;
