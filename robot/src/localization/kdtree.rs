@@ -105,83 +105,21 @@ impl KdTree {
                 return Some((c.index, dx * dx + dy * dy));
             }
         }
-        let mut best = match hint.and_then(|h| self.original.get(h).map(|&p| (h, p))) {
-            Some((h, p)) => {
-                let (dx, dy) = (p[0] - q[0], p[1] - q[1]);
-                (h, dx * dx + dy * dy)
-            }
-            None => (usize::MAX, f64::INFINITY),
-        };
-        let mut others = f64::INFINITY;
-        if self.points.is_empty() {
-            return None;
-        }
-        self.search_bounded(0, self.points.len(), q, &mut best, &mut others);
-        if best.0 == usize::MAX {
-            return None; // (only without a hint: `last` was `None`)
-        }
+        let (index, d2, others) = self.nearest_bounded(q, 1.0, hint, |_, p| {
+            let (dx, dy) = (p[0] - q[0], p[1] - q[1]);
+            dx * dx + dy * dy
+        })?;
         // Every other point is at least √others from q, the answer √d² from it: while q moves
         // less than half the difference, nothing can overtake the answer. A nanometre and a
         // relative 10⁻¹² are kept back for the roundings of the squared distances.
-        let (near, far) = (best.1.sqrt(), others.sqrt());
+        let (near, far) = (d2.sqrt(), others.sqrt());
         let reach = 0.5 * (far - near) - 1e-9 - 1e-12 * far;
         *last = Some(LastNearest {
             query: q,
-            index: best.0,
+            index,
             reach2: if reach > 0.0 { reach * reach } else { 0.0 },
         });
-        Some(best)
-    }
-
-    /// [`search`](Self::search) by Euclidean distance, visiting the same nodes in the same order
-    /// (so it finds the same point), that also keeps in `others` a lower bound on the squared
-    /// distance from `q` of every point but the best: the other points it measured, and the
-    /// squared gap to each range it did not enter.
-    fn search_bounded(
-        &self,
-        lo: usize,
-        hi: usize,
-        q: [f64; 2],
-        best: &mut (usize, f64),
-        others: &mut f64,
-    ) {
-        let visit = |k: usize, best: &mut (usize, f64), others: &mut f64| {
-            let original = self.index[k] as usize;
-            let p = self.points[k];
-            let (dx, dy) = (p[0] - q[0], p[1] - q[1]);
-            let d = dx * dx + dy * dy;
-            if original == best.0 {
-                return; // the hint, met again in the tree
-            }
-            if d < best.1 {
-                *others = others.min(best.1);
-                *best = (original, d);
-            } else {
-                *others = others.min(d);
-            }
-        };
-        if hi - lo <= LEAF {
-            for k in lo..hi {
-                visit(k, best, others);
-            }
-            return;
-        }
-        let mid = (lo + hi) / 2;
-        let a = usize::from(self.axis[mid]);
-        let gap = q[a] - self.points[mid][a];
-        visit(mid, best, others);
-        let (near, far) = if gap < 0.0 {
-            ((lo, mid), (mid + 1, hi))
-        } else {
-            ((mid + 1, hi), (lo, mid))
-        };
-        self.search_bounded(near.0, near.1, q, best, others);
-        if gap * gap < best.1 {
-            self.search_bounded(far.0, far.1, q, best, others);
-        } else if far.0 < far.1 {
-            // Every point beyond the splitting line is at least the gap away.
-            *others = others.min(gap * gap);
-        }
+        Some((index, d2))
     }
 
     /// The point minimising `metric(index, point)` (a squared distance), given that for any point
@@ -195,8 +133,33 @@ impl KdTree {
         q: [f64; 2],
         bound_scale: f64,
         hint: Option<usize>,
-        mut metric: impl FnMut(usize, [f64; 2]) -> f64,
+        metric: impl FnMut(usize, [f64; 2]) -> f64,
     ) -> Option<(usize, f64)> {
+        self.nearest_with(q, bound_scale, hint, metric, ())
+            .map(|(index, d, ())| (index, d))
+    }
+
+    /// [`nearest_by`](Self::nearest_by), and a lower bound on the metric of every other point.
+    fn nearest_bounded(
+        &self,
+        q: [f64; 2],
+        bound_scale: f64,
+        hint: Option<usize>,
+        metric: impl FnMut(usize, [f64; 2]) -> f64,
+    ) -> Option<(usize, f64, f64)> {
+        self.nearest_with(q, bound_scale, hint, metric, f64::INFINITY)
+    }
+
+    /// The search, `others` keeping what it learns of the points that are not the best (or
+    /// nothing, for `()`).
+    fn nearest_with<M: FnMut(usize, [f64; 2]) -> f64, O: Others>(
+        &self,
+        q: [f64; 2],
+        bound_scale: f64,
+        hint: Option<usize>,
+        mut metric: M,
+        mut others: O,
+    ) -> Option<(usize, f64, O)> {
         if self.points.is_empty() {
             return None;
         }
@@ -204,46 +167,92 @@ impl KdTree {
             Some((h, p)) => (h, metric(h, p)),
             None => (usize::MAX, f64::INFINITY),
         };
-        self.search(0, self.points.len(), q, bound_scale, &mut metric, &mut best);
+        let mut search = Search {
+            q,
+            bound_scale,
+            metric: &mut metric,
+            best: &mut best,
+            others: &mut others,
+        };
+        self.search(0, self.points.len(), &mut search);
         // No point at a finite distance (a query or points at infinity, a metric of NaN).
-        (best.0 != usize::MAX).then_some(best)
+        (best.0 != usize::MAX).then_some((best.0, best.1, others))
     }
 
-    fn search(
+    /// Searches the range `[lo, hi)`: near side first, the far side only when the splitting
+    /// line is nearer than the best so far.
+    fn search<M: FnMut(usize, [f64; 2]) -> f64, O: Others>(
         &self,
         lo: usize,
         hi: usize,
-        q: [f64; 2],
-        bound_scale: f64,
-        metric: &mut impl FnMut(usize, [f64; 2]) -> f64,
-        best: &mut (usize, f64),
+        s: &mut Search<M, O>,
     ) {
         if hi - lo <= LEAF {
             for k in lo..hi {
-                let original = self.index[k] as usize;
-                let d = metric(original, self.points[k]);
-                if d < best.1 {
-                    *best = (original, d);
-                }
+                s.visit(self.index[k] as usize, self.points[k]);
             }
             return;
         }
         let mid = (lo + hi) / 2;
         let a = usize::from(self.axis[mid]);
-        let gap = q[a] - self.points[mid][a];
-        let original = self.index[mid] as usize;
-        let d = metric(original, self.points[mid]);
-        if d < best.1 {
-            *best = (original, d);
-        }
+        let gap = s.q[a] - self.points[mid][a];
+        s.visit(self.index[mid] as usize, self.points[mid]);
         let (near, far) = if gap < 0.0 {
             ((lo, mid), (mid + 1, hi))
         } else {
             ((mid + 1, hi), (lo, mid))
         };
-        self.search(near.0, near.1, q, bound_scale, metric, best);
-        if bound_scale * gap * gap < best.1 {
-            self.search(far.0, far.1, q, bound_scale, metric, best);
+        self.search(near.0, near.1, s);
+        let bound = s.bound_scale * gap * gap;
+        if bound < s.best.1 {
+            self.search(far.0, far.1, s);
+        } else if far.0 < far.1 {
+            // Every point beyond the splitting line is at least that far.
+            s.others.at_least(bound);
+        }
+    }
+}
+
+/// What a search keeps of the points that are not the best: a lower bound on their metric
+/// (`f64`), or nothing (`()`, costing nothing).
+trait Others {
+    /// Some other point is this far (or farther).
+    fn at_least(&mut self, d: f64);
+}
+
+impl Others for () {
+    #[inline(always)]
+    fn at_least(&mut self, _: f64) {}
+}
+
+impl Others for f64 {
+    #[inline(always)]
+    fn at_least(&mut self, d: f64) {
+        *self = self.min(d);
+    }
+}
+
+/// One search's query, metric and findings: the best point so far, and what is known of every
+/// other point (those measured, and the bound of each range not entered).
+struct Search<'a, M, O> {
+    q: [f64; 2],
+    bound_scale: f64,
+    metric: &'a mut M,
+    best: &'a mut (usize, f64),
+    others: &'a mut O,
+}
+
+impl<M: FnMut(usize, [f64; 2]) -> f64, O: Others> Search<'_, M, O> {
+    fn visit(&mut self, original: usize, p: [f64; 2]) {
+        if original == self.best.0 {
+            return; // the hint, met again in the tree
+        }
+        let d = (self.metric)(original, p);
+        if d < self.best.1 {
+            self.others.at_least(self.best.1);
+            *self.best = (original, d);
+        } else {
+            self.others.at_least(d);
         }
     }
 }

@@ -54,9 +54,10 @@ pub struct RunOptions {
     pub tour: Option<TourConfig>,
     /// Publishes the run live, paced to the wall clock.
     pub live: Option<Live>,
-    /// Builds `map.pgm`'s grid and `scans.jsonl`'s lines on a thread of their own as the scans
-    /// come ([`ScanStream`]), into [`RunRecord::streamed`]: they are ready when the simulation
-    /// ends (`twin run` does; runs whose files are not written need not).
+    /// Builds `map.pgm`'s grid, `scans.jsonl`'s lines and the tape's JSON on a thread of their
+    /// own as the scans and exchanges come ([`ScanStream`]), into [`RunRecord::streamed`]: they
+    /// are ready when the simulation ends (`twin run` does; runs whose files are not written
+    /// need not).
     pub stream: bool,
 }
 

@@ -122,19 +122,15 @@ impl ScanStream {
 
     /// A scan the tour kept, with the odometry at its stamp and its scene, in the order kept.
     pub fn kept(&mut self, scan: &LaserScan, odometry: Pose2, scene: Option<SceneTag>) {
-        self.hand(Item::Kept(scan.clone(), odometry, scene));
+        self.feed.hand(Item::Kept(scan.clone(), odometry, scene));
     }
 
     /// A scan for the grid, its base at `base` in the map frame, if its plane was level (the
     /// rule of the grid written afterwards).
     pub fn grid(&mut self, scan: &LaserScan, base: Pose2) {
         if let Some(laser) = grid_pose(&self.mount, scan, base) {
-            self.hand(Item::Grid(laser, scan.clone()));
+            self.feed.hand(Item::Grid(laser, scan.clone()));
         }
-    }
-
-    fn hand(&mut self, item: Item) {
-        self.feed.hand(item);
     }
 
     /// Everything built from the items handed over, once the builder is done (a tape feed

@@ -473,19 +473,8 @@ impl HalfPixels {
 
 /// Writes `n` in decimal, as `{}` does, without the formatter's machinery (a picture writes
 /// hundreds of thousands of them).
-fn push_whole(s: &mut String, mut n: u64) {
-    let mut digits = [0u8; 20];
-    let mut at = digits.len();
-    loop {
-        at -= 1;
-        digits[at] = b'0' + (n % 10) as u8;
-        n /= 10;
-        if n == 0 {
-            break;
-        }
-    }
-    // Only ASCII digits were written.
-    s.push_str(core::str::from_utf8(&digits[at..]).unwrap_or_default());
+fn push_whole(s: &mut String, n: u64) {
+    s.push_str(itoa::Buffer::new().format(n));
 }
 
 /// Writes `halves / 2` with one decimal only when it is not whole ("12", "12.5").
