@@ -83,7 +83,7 @@ fn the_sweep_meets_what_each_beam_meets_alone() {
             let (beams, axes) = (model.beams(), frame.axes());
             map.cast_plane_fan(frame.origin, axes, beams, 32.0, &mut plane);
             for (k, (dir, fast)) in dirs.iter().zip(&fan).enumerate() {
-                let reference = map.cast(frame.origin, *dir, 32.0);
+                let reference = map.cast_down_tree(frame.origin, *dir, 32.0);
                 assert!(
                     same(fast, &reference) && same(&plane.hit(&map, k), &reference),
                     "{name}, {frame:?}, beam {k}: sweep {fast:?}, in the plane {:?}, reference {reference:?}",
@@ -120,7 +120,7 @@ fn small_fans_at_any_heading_and_range_match_too() {
         let max = rng.random_range(0.5..12.0);
         map.cast_fan(frame.origin, &dirs, max, &mut fan);
         for (dir, fast) in dirs.iter().zip(&fan) {
-            let reference = map.cast(frame.origin, *dir, max);
+            let reference = map.cast_down_tree(frame.origin, *dir, max);
             assert!(
                 same(fast, &reference),
                 "{frame:?} {dir:?}: {fast:?} vs {reference:?}"
@@ -216,7 +216,7 @@ fn beams_through_the_ends_of_faces_match_too() {
                 map.cast_plane_fan(frame.origin, axes, beams, 32.0, &mut plane);
                 assert_eq!(plane.dirs(), &dirs[..]);
                 for (j, d) in dirs.iter().enumerate() {
-                    let reference = map.cast(frame.origin, *d, 32.0);
+                    let reference = map.cast_down_tree(frame.origin, *d, 32.0);
                     for fast in [&fan[j], &plane.hit(&map, j)] {
                         assert!(
                             same(fast, &reference),
@@ -231,9 +231,10 @@ fn beams_through_the_ends_of_faces_match_too() {
     assert!(aimed > 100);
 }
 
-/// A cast told a face (`cast_near`: what a reflected beam's or a sonar ray's neighbour met)
-/// answers what the plain cast answers, whether the hint is the face met, another face, one the
-/// ray misses, or no face at all: from random points in every world, in random directions,
+/// A single ray walked through the plan's grid (`cast`, what a reflected beam's leg or a sonar
+/// ray is) meets what it meets down the tree, and so does a walk told a face (`cast_near`: what
+/// the ray's neighbour met), whether the hint is the face met, another face, one the ray misses,
+/// or no face at all: from random points in every world (and around it), in random directions,
 /// level and not.
 #[test]
 fn a_hinted_cast_meets_what_the_plain_cast_meets() {
@@ -248,7 +249,13 @@ fn a_hinted_cast_meets_what_the_plain_cast_meets() {
             let angle = rng.random_range(-1.6f64..1.6);
             let dir = frame.direction(angle);
             let max = rng.random_range(0.5..32.0);
-            let plain = map.cast(frame.origin, dir, max);
+            let plain = map.cast_down_tree(frame.origin, dir, max);
+            let walked = map.cast(frame.origin, dir, max);
+            assert!(
+                same(&walked, &plain) && walked.map(|h| h.distance) == plain.map(|h| h.distance),
+                "{name}: from {:?} along {dir:?} within {max} m: walked {walked:?}, down the tree {plain:?}",
+                frame.origin
+            );
             let met = match plain {
                 Some(Hit {
                     surface: sim::world::Surface::Face(i),
@@ -272,4 +279,52 @@ fn a_hinted_cast_meets_what_the_plain_cast_meets() {
         right_hints > 1000,
         "the hints were often right: {right_hints}"
     );
+}
+
+/// The walk through the plan's grid where its rounding is tightest: rays through the faces'
+/// ends, rays along the axes (along walls and along the grid's lines), from the ends themselves
+/// and from points beside them, level and rising — the same face at the same distance as down
+/// the tree, every time.
+#[test]
+fn walked_rays_through_corners_and_along_walls_match_the_tree() {
+    let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(23);
+    let mut cast = 0;
+    for (name, world) in worlds() {
+        let map = WorldMap::new(&world);
+        let ends: Vec<[f64; 2]> = map.faces().iter().flat_map(|f| [f.a, f.b]).collect();
+        for _ in 0..400 {
+            let from = ends[rng.random_range(0..ends.len())];
+            let to = ends[rng.random_range(0..ends.len())];
+            let nudge = [0.0, 1e-7, -1e-7, 0.013][rng.random_range(0..4)];
+            let origin = [
+                from[0] + nudge,
+                from[1] - nudge,
+                rng.random_range(0.05..1.5),
+            ];
+            let rise = [0.0, 0.0, 0.3, -0.3][rng.random_range(0..4)];
+            let mut aims = vec![
+                [1.0, 0.0, rise],
+                [-1.0, 0.0, rise],
+                [0.0, 1.0, rise],
+                [0.0, -1.0, rise],
+            ];
+            let (dx, dy) = (to[0] - origin[0], to[1] - origin[1]);
+            if dx.hypot(dy) > 1e-6 {
+                aims.push([dx, dy, rise * dx.hypot(dy)]);
+            }
+            for aim in aims {
+                let norm = (aim[0] * aim[0] + aim[1] * aim[1] + aim[2] * aim[2]).sqrt();
+                let dir = aim.map(|v| v / norm);
+                let max = 32.0;
+                let walked = map.cast(origin, dir, max);
+                let tree = map.cast_down_tree(origin, dir, max);
+                assert!(
+                    same(&walked, &tree) && walked.map(|h| h.distance) == tree.map(|h| h.distance),
+                    "{name}: from {origin:?} along {dir:?}: walked {walked:?}, down the tree {tree:?}"
+                );
+                cast += 1;
+            }
+        }
+    }
+    assert!(cast > 10_000, "{cast} rays");
 }

@@ -107,15 +107,16 @@ impl SonarModel {
         let mut nearest = f64::INFINITY;
         for &k in &self.centre_first {
             let first = map.cast(origin, dirs[k], self.max_range.min(nearest));
-            if let Some(r) = self.follow(map, origin, dirs[k], first, nearest) {
+            if let Some(r) = self.follow(map, origin, dirs[k], first, nearest, false) {
                 nearest = nearest.min(r);
             }
         }
         self.heard(nearest, rng)
     }
 
-    /// [`SonarModel::echo`] with each ray of the cone followed to its end: the reference the
-    /// early stop is tested and benchmarked against.
+    /// [`SonarModel::echo`] with each ray of the cone followed to its end, every leg cast down
+    /// the world's tree instead of walking the plan's grid: the reference the early stop and
+    /// the walk are tested and benchmarked against.
     pub fn echo_per_ray(
         &self,
         map: &WorldMap,
@@ -127,8 +128,8 @@ impl SonarModel {
         let nearest = dirs
             .iter()
             .filter_map(|&dir| {
-                let first = map.cast(origin, dir, self.max_range);
-                self.follow(map, origin, dir, first, f64::INFINITY)
+                let first = map.cast_down_tree(origin, dir, self.max_range);
+                self.follow(map, origin, dir, first, f64::INFINITY, true)
             })
             .fold(f64::INFINITY, f64::min);
         self.heard(nearest, rng)
@@ -159,7 +160,7 @@ impl SonarModel {
 
     /// Follows one ray of the burst from `origin` along `dir`, `first` being what its first leg
     /// meets; the one-way path length of the echo it brings back, if it is heard and not longer
-    /// than `limit`.
+    /// than `limit`. Later legs go down the tree with `down_tree`.
     fn follow(
         &self,
         map: &WorldMap,
@@ -167,6 +168,7 @@ impl SonarModel {
         dir: [f64; 3],
         first: Option<Hit>,
         limit: f64,
+        down_tree: bool,
     ) -> Option<f64> {
         let (mut o, mut d) = ([origin[0], origin[1]], [dir[0], dir[1]]);
         let mut travelled = 0.0;
@@ -175,7 +177,13 @@ impl SonarModel {
             let hit = if leg == 0 {
                 first.filter(|h| h.distance <= reach)?
             } else {
-                map.cast_level(o, self.height, d, reach - travelled)?
+                let leg = [o[0], o[1], self.height];
+                let dir = [d[0], d[1], 0.0];
+                if down_tree {
+                    map.cast_down_tree(leg, dir, reach - travelled)?
+                } else {
+                    map.cast(leg, dir, reach - travelled)?
+                }
             };
             travelled += hit.distance;
             let n = [hit.normal[0], hit.normal[1]];

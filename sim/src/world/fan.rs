@@ -167,7 +167,7 @@ impl WorldMap {
             rel,
             buckets: Vec::new(),
         };
-        let mut nearest = Vec::new();
+        let mut nearest = Nearest::default();
         self.sweep(
             origin,
             &rays,
@@ -178,8 +178,8 @@ impl WorldMap {
         );
         hits.extend(
             dirs.iter()
-                .zip(nearest)
-                .map(|(&dir, near)| self.fan_hit(origin, dir, max, near)),
+                .enumerate()
+                .map(|(k, &dir)| self.fan_hit(origin, dir, max, nearest.get(k))),
         );
     }
 
@@ -218,6 +218,7 @@ impl WorldMap {
         out.dirs.clear();
         out.dirs
             .extend((0..fan.len()).map(|k| fan.direction(k, forward, left)));
+        out.rays.fill(&out.dirs);
         // A plan vector v lies under ray k when (v·F, |F|² v·L) points at angle a_k, F being the
         // forward axis's horizontal part: true when L is horizontal and square to F.
         let f = [forward[0], forward[1]];
@@ -228,12 +229,14 @@ impl WorldMap {
             square && f2 > 1e-12,
             self.faces().len() <= FAN_MAX_FACES,
         ) else {
-            out.nearest.clear();
-            out.nearest
-                .extend(out.dirs.iter().map(|&d| self.cast_faces(origin, d, max)));
+            out.nearest.reset(0);
+            for &d in &out.dirs {
+                let (t, i) = self.cast_faces(origin, d, max);
+                out.nearest.t.push(t);
+                out.nearest.face.push(i);
+            }
             return;
         };
-        out.rays.fill(&out.dirs);
         let p0 = pseudo_angle([fan.trig[0].1, fan.trig[0].0]);
         let in_plane = |v: [f64; 2]| {
             let q = [
@@ -247,6 +250,12 @@ impl WorldMap {
 
     /// The sweep: each face in reach tried against the rays whose pseudo-angle `rel` (from the
     /// first ray, increasing) is within the face's, `angle_of` giving a plan vector's.
+    ///
+    /// Faces are taken near to far (by bands of the gap between the origin and the face's box
+    /// in the plan, which no crossing of the face is nearer than), and of a face's rays only
+    /// those from the first to the last that have not met a face nearer than that gap are tried:
+    /// behind the first walls most faces are hidden whole. Ties go to the face listed first
+    /// whatever the order, so the order changes the work, never the answer.
     fn sweep(
         &self,
         origin: [f64; 3],
@@ -254,12 +263,13 @@ impl WorldMap {
         turns: &Turns,
         angle_of: impl Fn([f64; 2]) -> f64,
         max: f64,
-        nearest: &mut Vec<(f64, u32)>,
+        nearest: &mut Nearest,
     ) {
         let n = turns.rel.len();
-        nearest.clear();
-        nearest.resize(n, (f64::INFINITY, u32::MAX));
+        nearest.reset(n);
         let level = rays.z.iter().all(|&z| z == 0.0);
+        let mut order = core::mem::take(&mut nearest.order);
+        order.clear();
         for (i, face) in self.faces().iter().enumerate() {
             if level && !(origin[2] >= face.z[0] - Z_EPS && origin[2] <= face.z[1] + Z_EPS) {
                 continue; // a level fan passes over or under this face
@@ -275,16 +285,32 @@ impl WorldMap {
                 face.a[1].max(face.b[1]),
                 origin[1],
             );
-            if gx * gx + gy * gy > max * max {
+            let gap2 = gx * gx + gy * gy;
+            if gap2 > max * max {
                 continue; // out of reach
             }
+            order.push((gap2, i as u32));
+        }
+        nearest.by_gap(&mut order);
+        for &(gap2, i) in &order {
+            let face = &self.faces()[i as usize];
+            // A ray that met a face nearer than this one's gap (with a margin far above the
+            // rounding of either) cannot meet this one first, nor as near.
+            let hidden = gap2 * (1.0 - 1e-9) - 1e-18;
+            let mut sweep = |range: core::ops::Range<usize>| {
+                // Only the rays from the first to the last still open to this face.
+                let open = |t: &f64| t * t >= hidden;
+                let ts = &nearest.t[range.clone()];
+                if let Some(first) = ts.iter().position(open) {
+                    let last = ts.iter().rposition(open).unwrap_or(first);
+                    let range = range.start + first..range.start + last + 1;
+                    rays.cross(face, i, origin, max, range, nearest);
+                }
+            };
             let a = [face.a[0] - origin[0], face.a[1] - origin[1]];
             let b = [face.b[0] - origin[0], face.b[1] - origin[1]];
             let cross = a[0] * b[1] - a[1] * b[0];
             let scale = a[0] * a[0] + a[1] * a[1] + b[0] * b[0] + b[1] * b[1];
-            let mut sweep = |range: core::ops::Range<usize>| {
-                rays.cross(face, i as u32, origin, max, range, nearest);
-            };
             if cross.abs() <= 1e-12 * scale {
                 // The origin is on the face's line (or an end): any ray may cross it.
                 sweep(0..n);
@@ -304,6 +330,62 @@ impl WorldMap {
                 sweep(0..turns.count_below(end - 4.0, true).min(from));
             }
         }
+        nearest.order = order;
+    }
+}
+
+/// Each ray's nearest face and its distance (`u32::MAX` and infinity: none), by column, and the
+/// faces' order for the sweep, kept from one fan to the next.
+#[derive(Clone, Debug, Default)]
+struct Nearest {
+    t: Vec<f64>,
+    face: Vec<u32>,
+    order: Vec<(f64, u32)>,
+    /// The order's buffers: faces by band of gap, and how many fall in each band.
+    sorted: Vec<(f64, u32)>,
+    bands: Vec<u32>,
+}
+
+/// Width of the bands of gap the faces are ordered by, metres, and their number (the last holds
+/// every face farther).
+const BAND: f64 = 0.5;
+const BANDS: usize = 64;
+
+impl Nearest {
+    /// `order` (squared gaps and faces) near to far by bands of [`BAND`] metres, in one
+    /// counting pass: the sweep needs the near faces first, not an exact order.
+    fn by_gap(&mut self, order: &mut Vec<(f64, u32)>) {
+        let band = |gap2: f64| ((gap2.sqrt() * (1.0 / BAND)) as usize).min(BANDS - 1);
+        self.bands.clear();
+        self.bands.resize(BANDS + 1, 0);
+        for &(gap2, _) in order.iter() {
+            self.bands[band(gap2) + 1] += 1;
+        }
+        for b in 1..=BANDS {
+            self.bands[b] += self.bands[b - 1];
+        }
+        self.sorted.clear();
+        self.sorted.resize(order.len(), (0.0, 0));
+        for &(gap2, i) in order.iter() {
+            let slot = &mut self.bands[band(gap2)];
+            self.sorted[*slot as usize] = (gap2, i);
+            *slot += 1;
+        }
+        core::mem::swap(order, &mut self.sorted);
+    }
+
+    /// `n` rays that met nothing yet.
+    fn reset(&mut self, n: usize) {
+        self.t.clear();
+        self.t.resize(n, f64::INFINITY);
+        self.face.clear();
+        self.face.resize(n, u32::MAX);
+    }
+
+    /// Ray `k`'s nearest face: its distance and number.
+    #[inline]
+    fn get(&self, k: usize) -> (f64, u32) {
+        (self.t[k], self.face[k])
     }
 }
 
@@ -314,8 +396,8 @@ pub struct FanCast {
     origin: [f64; 3],
     max: f64,
     dirs: Vec<[f64; 3]>,
-    /// Each ray's nearest face and its distance (`u32::MAX`: none).
-    nearest: Vec<(f64, u32)>,
+    /// Each ray's nearest face and its distance.
+    nearest: Nearest,
     /// The directions again by component, for the sweep.
     rays: Rays,
 }
@@ -336,10 +418,17 @@ impl FanCast {
         &self.dirs
     }
 
+    /// Ray `k`'s direction: `dirs()[k]`, read from the columns the sweep keeps (a copy of a
+    /// three-element row through memory can cost more than the arithmetic on it).
+    #[inline]
+    pub fn dir(&self, k: usize) -> [f64; 3] {
+        [self.rays.x[k], self.rays.y[k], self.rays.z[k]]
+    }
+
     /// What ray `k` meets first: exactly [`WorldMap::cast`]'s answer.
     #[inline]
     pub fn hit(&self, map: &WorldMap, k: usize) -> Option<Hit> {
-        map.fan_hit(self.origin, self.dirs[k], self.max, self.nearest[k])
+        map.fan_hit(self.origin, self.dir(k), self.max, self.nearest.get(k))
     }
 }
 
@@ -371,8 +460,8 @@ impl Rays {
         }
     }
 
-    /// Tries `face` (number `i`, tried after every lower number) against the rays in `range`,
-    /// keeping in `nearest` each ray's nearest crossing: the arithmetic of
+    /// Tries `face` (number `i`) against the rays in `range`, keeping in `nearest` each ray's
+    /// nearest crossing, the face listed first of equally near ones: the arithmetic of
     /// [`WorldMap::face_crossing`] step for step, without branches, so it runs at the
     /// processor's pace whichever rays cross.
     #[inline]
@@ -383,7 +472,7 @@ impl Rays {
         origin: [f64; 3],
         max: f64,
         range: core::ops::Range<usize>,
-        nearest: &mut [(f64, u32)],
+        nearest: &mut Nearest,
     ) {
         let e = [face.b[0] - face.a[0], face.b[1] - face.a[1]];
         let w = [face.a[0] - origin[0], face.a[1] - origin[1]];
@@ -394,25 +483,30 @@ impl Rays {
             &self.y[range.clone()],
             &self.z[range.clone()],
         );
-        for (k, best) in nearest[range].iter_mut().enumerate() {
-            let d = [x[k], y[k]];
-            let denom = d[0] * e[1] - d[1] * e[0];
-            let nu = w[0] * d[1] - w[1] * d[0];
+        let (best_t, best_face) = (
+            &mut nearest.t[range.clone()],
+            &mut nearest.face[range.clone()],
+        );
+        let columns = x.iter().zip(y).zip(z).zip(best_t.iter_mut().zip(best_face));
+        for (((&dx, &dy), &dz), (best_t, best_face)) in columns {
+            let denom = dx * e[1] - dy * e[0];
+            let nu = w[0] * dy - w[1] * dx;
             let flip = denom < 0.0;
             let den = denom.abs();
             let (nt, nu) = if flip { (-nt, -nu) } else { (nt, nu) };
             let t = nt / den;
-            let height = origin[2] + z[k] * t;
-            let crosses = (den > 1e-15 * (d[0].abs() + d[1].abs()))
+            let height = origin[2] + dz * t;
+            let crosses = (den > 1e-15 * (dx.abs() + dy.abs()))
                 & (nt >= 0.0)
                 & (nu >= 0.0)
                 & (nu <= den)
                 & (t <= max)
                 & (height >= bottom)
                 & (height <= top);
-            if crosses & (t < best.0) {
-                *best = (t, i);
-            }
+            let nearer = (t < *best_t) | ((t == *best_t) & (i < *best_face));
+            let take = crosses & nearer;
+            *best_t = if take { t } else { *best_t };
+            *best_face = if take { i } else { *best_face };
         }
     }
 }

@@ -14,6 +14,7 @@
 //! ([`WorldMap::cast_fan`], in `fan.rs`), with the same answers.
 
 use super::index::{SurfaceId, SurfaceIndex};
+use super::walk::WalkGrid;
 use crate::config::{Material, Optics, WorldDescription};
 use parry2d::bounding_volume::BoundingVolume;
 use parry2d::math::Vector;
@@ -140,6 +141,9 @@ impl Cap {
     }
 }
 
+/// No face met: what the casts of faces answer for a ray that meets none.
+pub(super) const NO_FACE: (f64, u32) = (f64::INFINITY, u32::MAX);
+
 /// Tolerance on heights when deciding whether a ray passes a face, metres.
 pub(super) const Z_EPS: f64 = 1e-9;
 
@@ -154,6 +158,9 @@ pub struct WorldMap {
     caps: Vec<Cap>,
     ceiling: f64,
     index: SurfaceIndex,
+    /// The plan's grid that single rays walk; `None` without faces, or where the tree is
+    /// faster (see [`WalkGrid::new`]).
+    walk: Option<WalkGrid>,
 }
 
 impl WorldMap {
@@ -209,6 +216,7 @@ impl WorldMap {
             optics: world.optics,
             tree,
             index: SurfaceIndex::new(&faces, &caps),
+            walk: WalkGrid::new(&faces.iter().map(|f| [f.a, f.b]).collect::<Vec<_>>()),
             faces,
             normals,
             caps,
@@ -246,18 +254,29 @@ impl WorldMap {
     }
 
     /// The first surface along the ray from `origin` in the unit direction `dir`, within `max`
-    /// metres.
+    /// metres, found by walking the plan's grid from the origin.
     ///
-    /// Of faces met at the same distance, the one listed first wins, so [`WorldMap::cast_fan`]
-    /// answers exactly the same.
+    /// Of faces met at the same distance, the one listed first wins, so this, the tree's answer
+    /// ([`WorldMap::cast_down_tree`]) and [`WorldMap::cast_fan`]'s are the same to the last bit.
     pub fn cast(&self, origin: [f64; 3], dir: [f64; 3], max: f64) -> Option<Hit> {
         self.fan_hit(origin, dir, max, self.cast_faces(origin, dir, max))
     }
 
+    /// [`WorldMap::cast`] down the world's tree of faces' boxes: the reference the walk and the
+    /// sweep are tested and benchmarked against.
+    pub fn cast_down_tree(&self, origin: [f64; 3], dir: [f64; 3], max: f64) -> Option<Hit> {
+        self.fan_hit(
+            origin,
+            dir,
+            max,
+            self.cast_faces_down_tree(origin, dir, max),
+        )
+    }
+
     /// [`WorldMap::cast`] told the face the ray is likely to meet first (`hint`: the face a
     /// neighbouring ray met, as a scan's beams reflected by one mirror meet the same wall one
-    /// after another): the same answer, found sooner when the hint is right, for the tree then
-    /// only looks nearer than the hinted crossing.
+    /// after another): the same answer; the walk then stops by the hinted crossing at the
+    /// latest.
     pub fn cast_near(
         &self,
         origin: [f64; 3],
@@ -268,22 +287,42 @@ impl WorldMap {
         let start = hint
             .filter(|&i| i < self.faces.len() && !is_vertical(dir))
             .and_then(|i| Some((self.face_crossing(i, origin, dir, max)?, i as u32)));
-        self.fan_hit(
-            origin,
-            dir,
-            max,
-            self.cast_faces_from(origin, dir, max, start),
-        )
+        let nearest = match &self.walk {
+            Some(walk) if !is_vertical(dir) => {
+                walk.cast(origin, dir, max, start.unwrap_or(NO_FACE), |i| {
+                    self.face_crossing(i, origin, dir, max)
+                })
+            }
+            _ => self.cast_faces_from(origin, dir, max, start),
+        };
+        self.fan_hit(origin, dir, max, nearest)
     }
 
     /// The nearest vertical face along the ray within `max` metres and its distance, or
-    /// `u32::MAX` for none, down the tree.
+    /// `u32::MAX` for none, by walking the plan's grid (down the tree in a world without one).
+    #[inline]
     pub(super) fn cast_faces(&self, origin: [f64; 3], dir: [f64; 3], max: f64) -> (f64, u32) {
+        match &self.walk {
+            Some(walk) if !is_vertical(dir) => walk.cast(origin, dir, max, NO_FACE, |i| {
+                self.face_crossing(i, origin, dir, max)
+            }),
+            _ => self.cast_faces_from(origin, dir, max, None),
+        }
+    }
+
+    /// [`WorldMap::cast_faces`] down the tree.
+    pub(super) fn cast_faces_down_tree(
+        &self,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        max: f64,
+    ) -> (f64, u32) {
         self.cast_faces_from(origin, dir, max, None)
     }
 
-    /// [`WorldMap::cast_faces`] with a face the ray is known to cross, and where (`start`), so
-    /// only nearer boxes are searched. Ties keep the face listed first, as without it.
+    /// [`WorldMap::cast_faces_down_tree`] with a face the ray is known to cross, and where
+    /// (`start`), so only nearer boxes are searched. Ties keep the face listed first, as
+    /// without it.
     fn cast_faces_from(
         &self,
         origin: [f64; 3],
@@ -295,12 +334,14 @@ impl WorldMap {
             // In the plan the ray runs along `dir`'s horizontal part, so a crossing's parameter
             // is the distance along the ray in 3D, with no normalising.
             let slab = Slab::new([origin[0], origin[1]], [dir[0], dir[1]]);
-            // The traversal prunes with `f32` costs; the nearest face is kept here in `f64`,
-            // and each cost handed back is rounded up so no box that may hold it is pruned.
-            let nearest = core::cell::Cell::new(start.unwrap_or((f64::INFINITY, u32::MAX)));
+            // The traversal prunes with `f32` costs, a box whose entry is not below the bound;
+            // the nearest face is kept here in `f64`, and each bound handed back is rounded up
+            // past it, so no box that may hold it or an equally near face is pruned (a ray from
+            // a face's end meets it, and maybe a face listed before it, at 0).
+            let nearest = core::cell::Cell::new(start.unwrap_or(NO_FACE));
             let bound = start.map_or(max, |(t, _)| t);
             self.tree.find_best(
-                round_up(bound),
+                round_up(bound).next_up(),
                 |node, best| slab.entry(node.mins(), node.maxs(), best),
                 |leaf, _| {
                     let t = self.face_crossing(leaf as usize, origin, dir, max)?;
@@ -308,12 +349,12 @@ impl WorldMap {
                     if t < t_best || (t == t_best && leaf < leaf_best) {
                         nearest.set((t, leaf));
                     }
-                    Some(round_up(nearest.get().0))
+                    Some(round_up(nearest.get().0).next_up())
                 },
             );
             nearest.get()
         } else {
-            (f64::INFINITY, u32::MAX)
+            NO_FACE
         }
     }
 
@@ -337,10 +378,13 @@ impl WorldMap {
     #[inline]
     pub(super) fn face_hit(&self, i: usize, t: f64, dir: [f64; 3]) -> Hit {
         let [nx, ny] = self.normals[i];
-        let mut normal = [nx, ny, 0.0];
-        if normal[0] * dir[0] + normal[1] * dir[1] > 0.0 {
-            normal = [-normal[0], -normal[1], 0.0];
-        }
+        // Turned to face the ray, without a branch (which side a beam sees changes often).
+        let facing = if nx * dir[0] + ny * dir[1] > 0.0 {
+            -1.0
+        } else {
+            1.0
+        };
+        let normal = [nx * facing, ny * facing, 0.0];
         Hit {
             distance: t,
             surface: Surface::Face(i),

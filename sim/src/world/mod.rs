@@ -8,6 +8,7 @@ mod index;
 mod map;
 pub mod raster;
 pub mod score;
+mod walk;
 
 pub use fan::{FAN_MAX_FACES, FanCast, PlaneFan};
 pub use index::SurfaceId;

@@ -126,6 +126,8 @@ pub struct Pulses<'a> {
     /// Other robots, which every leg can meet.
     others: &'a [Disc],
     max_range: f64,
+    /// Every leg cast down the world's tree ([`WorldMap::cast_down_tree`]), as the reference.
+    down_tree: bool,
 }
 
 impl<'a> Pulses<'a> {
@@ -147,6 +149,16 @@ impl<'a> Pulses<'a> {
             body,
             others: &[],
             max_range,
+            down_tree: false,
+        }
+    }
+
+    /// The same pulses with every leg cast down the world's tree: the reference the walk of
+    /// the plan's grid and the sweep are tested against.
+    pub fn down_tree(self) -> Self {
+        Pulses {
+            down_tree: true,
+            ..self
         }
     }
 
@@ -158,7 +170,7 @@ impl<'a> Pulses<'a> {
     /// Follows one pulse from `origin` along the unit direction `dir`.
     pub fn trace(&self, origin: [f64; 3], dir: [f64; 3], rng: &mut SimRng) -> Echo {
         let first = (self.max_range > 0.0)
-            .then(|| self.map.cast(origin, dir, self.max_range))
+            .then(|| self.cast(origin, dir, self.max_range, &None))
             .flatten();
         self.trace_from(origin, dir, first.as_ref(), rng)
     }
@@ -181,7 +193,7 @@ impl<'a> Pulses<'a> {
     /// beam's second leg met, and becomes this one's. Neighbouring beams reflected by the same
     /// mirror mostly meet the same wall, so the tree is searched only nearer than it
     /// ([`WorldMap::cast_near`]): the same echo, sooner.
-    #[inline]
+    #[inline(always)]
     pub fn trace_near(
         &self,
         origin: [f64; 3],
@@ -213,6 +225,16 @@ impl<'a> Pulses<'a> {
         self.follow(origin, dir, first, hint, rng)
     }
 
+    /// What a leg from `origin` along `dir` meets first within `max`.
+    #[inline]
+    fn cast(&self, origin: [f64; 3], dir: [f64; 3], max: f64, hint: &Option<usize>) -> Option<Hit> {
+        if self.down_tree {
+            self.map.cast_down_tree(origin, dir, max)
+        } else {
+            self.map.cast_near(origin, dir, max, *hint)
+        }
+    }
+
     /// The pulse's legs, surface by surface, for [`Pulses::trace_near`].
     #[inline(never)]
     fn follow(
@@ -237,7 +259,7 @@ impl<'a> Pulses<'a> {
                 let wall = first.map(|&hit| Contact::from(hit));
                 nearer_disc(wall, self.others.iter(), o, d, remaining)
             } else {
-                let wall = self.map.cast_near(o, d, remaining, *hint);
+                let wall = self.cast(o, d, remaining, hint);
                 if leg == 1
                     && let Some(Hit {
                         surface: Surface::Face(i),

@@ -257,6 +257,7 @@ impl LaserModel {
     ) -> LaserScan {
         let pulses = beam::Pulses::new(map, body, self.range_max_m).among(others);
         if self.casting == Casting::PerBeam {
+            let pulses = pulses.down_tree();
             let ranges_mm = self
                 .directions(frame)
                 .into_iter()
@@ -282,7 +283,7 @@ impl LaserModel {
             let mut hint: Option<usize> = None;
             (0..fan.len())
                 .map(|k| {
-                    let (first, dir) = (fan.hit(map, k), fan.dirs()[k]);
+                    let (first, dir) = (fan.hit(map, k), fan.dir(k));
                     let echo = pulses.trace_near(frame.origin, dir, first.as_ref(), &mut hint, rng);
                     self.reading_mm(echo, rng)
                 })
