@@ -12,6 +12,7 @@ mod issue_15_first_hour;
 mod issue_16_viewer;
 mod issue_17_fast_laser;
 mod issue_17_fleet;
+mod issue_17_glide;
 mod issue_17_polling;
 mod issue_18_honest_matches;
 mod issue_19_live;

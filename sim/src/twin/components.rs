@@ -43,6 +43,11 @@ pub struct Physics(pub PhysicsWorld);
 #[derive(Resource)]
 pub struct Map(pub WorldMap);
 
+/// Whether a step in which every robot moves clear of every wall is integrated without
+/// rapier's solver ([`super::systems::step_physics`]): on unless a reference run turns it off.
+#[derive(Resource)]
+pub struct Gliding(pub bool);
+
 /// Other robots' bodies in the same world (a [`super::fleet::Fleet`]'s), as their lasers see
 /// them: empty for a robot alone.
 #[derive(Resource, Default)]
@@ -107,6 +112,9 @@ pub struct Chassis {
     pub touching: bool,
     /// Times the footprint came into contact with a wall.
     pub collisions: u32,
+    /// Where the footprint's centre was when its distance to the nearest face was last
+    /// measured, and that distance: a lower bound of the distance from anywhere near.
+    pub clearance: Option<([f64; 2], f64)>,
 }
 
 /// The true path of a robot's base.

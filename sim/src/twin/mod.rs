@@ -136,6 +136,7 @@ impl Twin {
         world.insert_resource(Physics(physics));
         world.insert_resource(Map(map));
         world.insert_resource(OtherRobots::default());
+        world.insert_resource(Gliding(true));
         let robot = world
             .spawn((
                 Board(BaseBoard::power_on(robot_desc.drive.serial_baud)),
@@ -163,6 +164,7 @@ impl Twin {
                     height: robot_desc.body.height_m.get(),
                     touching: false,
                     collisions: 0,
+                    clearance: None,
                 },
                 Trajectory::starting_at(start),
                 Lidar {
@@ -286,6 +288,12 @@ impl Twin {
             }
         }
         *self.world.resource_mut::<OtherRobots>() = OtherRobots { all, me, near };
+    }
+
+    /// Whether steps clear of every wall skip rapier's solver (the default; the positions are
+    /// the same to the last bit either way).
+    pub fn set_gliding(&mut self, on: bool) {
+        self.world.insert_resource(Gliding(on));
     }
 
     /// Advances the world by one [`STEP`].
