@@ -398,7 +398,18 @@ fn classify_points(record: &RunRecord, map: &WorldMap) -> ScanPoints {
     let stride = total.div_ceil(MAX_POINTS).max(1);
     let mut out = ScanPoints::default();
     let mut k = 0usize;
+    // Each beam's sine and cosine, computed again only for a scan of other angles.
+    let mut beams: ((f64, f64), Vec<(f64, f64)>) = ((f64::NAN, f64::NAN), Vec::new());
     for r in &record.scans {
+        let angles = (r.scan.angle_min, r.scan.angle_increment);
+        if angles != beams.0 || r.scan.len() != beams.1.len() {
+            beams = (
+                angles,
+                (0..r.scan.len())
+                    .map(|i| r.scan.angle(i).sin_cos())
+                    .collect(),
+            );
+        }
         let at_odometry = r.frame.carried(r.truth, r.odometry);
         // Each frame's axes once a scan, each beam's angle once: a point is then sums and
         // products.
@@ -417,7 +428,7 @@ fn classify_points(record: &RunRecord, map: &WorldMap) -> ScanPoints {
             if !k.is_multiple_of(stride) {
                 continue;
             }
-            let trig = r.scan.angle(i).sin_cos();
+            let trig = beams.1[i];
             let p = point(&r.frame, axes, trig, range);
             let target = match PointKind::of(map, p) {
                 PointKind::Ghost => &mut out.ghosts,
