@@ -99,9 +99,7 @@ impl Electrics {
             2.0 * self.motor.battery_v(),
         ];
         core::array::from_fn(|i| {
-            (volts[i] * 1000.0 * 10.0 / DIVIDERS[i])
-                .round()
-                .clamp(0.0, 1023.0) as u16
+            super::round(volts[i] * 1000.0 * 10.0 / DIVIDERS[i]).clamp(0.0, 1023.0) as u16
         })
     }
 }

@@ -166,9 +166,9 @@ impl Motor {
                 omega_ss + (w0 - omega_ss) * decay
             };
         }
-        let before = self.angle_counts.floor();
+        let before = super::floor(self.angle_counts);
         self.angle_counts += rotation * p.counts_per_turn / (2.0 * PI);
-        let crossed = (self.angle_counts.floor() - before).abs() as u64;
+        let crossed = (super::floor(self.angle_counts) - before).abs() as u64;
         self.edges = self.edges.saturating_add(crossed as u32);
         self.total_edges += crossed;
         let mean_omega = if dt > 0.0 { rotation / dt } else { omega0 };

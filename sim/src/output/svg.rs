@@ -397,7 +397,7 @@ fn classify_points(record: &RunRecord, map: &WorldMap) -> ScanPoints {
     let total: usize = record.scans.iter().map(|r| r.scan.len()).sum();
     let stride = total.div_ceil(MAX_POINTS).max(1);
     let mut out = ScanPoints::default();
-    let mut k = 0usize;
+    let mut skip = stride;
     // Each beam's sine and cosine, computed again only for a scan of other angles.
     let mut beams: ((f64, f64), Vec<(f64, f64)>) = ((f64::NAN, f64::NAN), Vec::new());
     for r in &record.scans {
@@ -424,10 +424,12 @@ fn classify_points(record: &RunRecord, map: &WorldMap) -> ScanPoints {
             let Some(range) = r.scan.range_m(i) else {
                 continue;
             };
-            k += 1;
-            if !k.is_multiple_of(stride) {
+            // Every `stride`-th returned beam, counted down (no division per beam).
+            skip -= 1;
+            if skip != 0 {
                 continue;
             }
+            skip = stride;
             let trig = beams.1[i];
             let p = point(&r.frame, axes, trig, range);
             let target = match PointKind::of(map, p) {
