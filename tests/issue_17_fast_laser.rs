@@ -66,6 +66,11 @@ fn same(fast: &Option<Hit>, reference: &Option<Hit>) -> bool {
     }
 }
 
+/// [`same`], and the same distance to the last bit.
+fn identical(fast: &Option<Hit>, reference: &Option<Hit>) -> bool {
+    same(fast, reference) && fast.map(|h| h.distance) == reference.map(|h| h.distance)
+}
+
 #[test]
 fn the_sweep_meets_what_each_beam_meets_alone() {
     let lms = crate::common::robot("pioneer-3dx").laser;
@@ -252,7 +257,7 @@ fn a_hinted_cast_meets_what_the_plain_cast_meets() {
             let plain = map.cast_down_tree(frame.origin, dir, max);
             let walked = map.cast(frame.origin, dir, max);
             assert!(
-                same(&walked, &plain) && walked.map(|h| h.distance) == plain.map(|h| h.distance),
+                identical(&walked, &plain),
                 "{name}: from {:?} along {dir:?} within {max} m: walked {walked:?}, down the tree {plain:?}",
                 frame.origin
             );
@@ -267,7 +272,7 @@ fn a_hinted_cast_meets_what_the_plain_cast_meets() {
                 right_hints += usize::from(hint.is_some() && hint == met);
                 let near = map.cast_near(frame.origin, dir, max, hint);
                 assert!(
-                    same(&near, &plain) && near.map(|h| h.distance) == plain.map(|h| h.distance),
+                    identical(&near, &plain),
                     "{name}: from {:?} along {dir:?} within {max} m, hint {hint:?}: {near:?} against {plain:?}",
                     frame.origin
                 );
@@ -319,7 +324,7 @@ fn walked_rays_through_corners_and_along_walls_match_the_tree() {
                 let walked = map.cast(origin, dir, max);
                 let tree = map.cast_down_tree(origin, dir, max);
                 assert!(
-                    same(&walked, &tree) && walked.map(|h| h.distance) == tree.map(|h| h.distance),
+                    identical(&walked, &tree),
                     "{name}: from {origin:?} along {dir:?}: walked {walked:?}, down the tree {tree:?}"
                 );
                 cast += 1;

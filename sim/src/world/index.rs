@@ -113,13 +113,7 @@ impl SurfaceIndex {
                 }
             }
         }
-        let mut starts = Vec::with_capacity(lists.len() + 1);
-        let mut items = Vec::new();
-        starts.push(0);
-        for list in lists {
-            items.extend(list);
-            starts.push(items.len() as u32);
-        }
+        let (starts, items) = super::packed(lists);
         SurfaceIndex {
             origin: min,
             cell,

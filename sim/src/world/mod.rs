@@ -11,5 +11,17 @@ pub mod score;
 mod walk;
 
 pub use fan::{FAN_MAX_FACES, FanCast, PlaneFan};
+
+/// Per-cell lists packed into one: cell `k`'s items are `items[starts[k]..starts[k + 1]]`.
+fn packed<T>(lists: Vec<Vec<T>>) -> (Vec<u32>, Vec<T>) {
+    let mut starts = Vec::with_capacity(lists.len() + 1);
+    let mut items = Vec::new();
+    starts.push(0);
+    for list in lists {
+        items.extend(list);
+        starts.push(items.len() as u32);
+    }
+    (starts, items)
+}
 pub use index::SurfaceId;
 pub use map::{Cap, Face, Hit, PointKind, Surface, WorldMap, point_segment_distance};

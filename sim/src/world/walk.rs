@@ -89,13 +89,7 @@ impl WalkGrid {
         if lists.iter().filter(|l| !l.is_empty()).count() * MIN_FILLED < lists.len() {
             return None;
         }
-        let mut starts = Vec::with_capacity(lists.len() + 1);
-        let mut items = Vec::new();
-        starts.push(0);
-        for list in lists {
-            items.extend(list);
-            starts.push(items.len() as u32);
-        }
+        let (starts, items) = super::packed(lists);
         Some(WalkGrid {
             origin,
             far: [0, 1].map(|k| origin[k] + size[k] as f64 * cell),
