@@ -177,12 +177,11 @@ impl SonarModel {
             let hit = if leg == 0 {
                 first.filter(|h| h.distance <= reach)?
             } else {
-                let leg = [o[0], o[1], self.height];
-                let dir = [d[0], d[1], 0.0];
+                let max = reach - travelled;
                 if down_tree {
-                    map.cast_down_tree(leg, dir, reach - travelled)?
+                    map.cast_down_tree([o[0], o[1], self.height], [d[0], d[1], 0.0], max)?
                 } else {
-                    map.cast(leg, dir, reach - travelled)?
+                    map.cast_level(o, self.height, d, max)?
                 }
             };
             travelled += hit.distance;

@@ -43,8 +43,9 @@ pub struct Physics(pub PhysicsWorld);
 #[derive(Resource)]
 pub struct Map(pub WorldMap);
 
-/// Whether a step in which every robot moves clear of every wall is integrated without
-/// rapier's solver ([`super::systems::step_physics`]): on unless a reference run turns it off.
+/// Whether a step in which a robot alone (not one of a fleet) moves clear of every wall is
+/// integrated without rapier's solver ([`super::systems::step_physics`]): on unless a reference
+/// run turns it off.
 #[derive(Resource)]
 pub struct Gliding(pub bool);
 

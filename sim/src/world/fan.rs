@@ -289,10 +289,15 @@ impl WorldMap {
             if gap2 > max * max {
                 continue; // out of reach
             }
-            order.push((gap2, i as u32));
+            let band = ((gap2.sqrt() * (1.0 / BAND)) as usize).min(BANDS - 1) as u32;
+            order.push(InReach {
+                gap2,
+                face: i as u32,
+                band,
+            });
         }
         nearest.by_gap(&mut order);
-        for &(gap2, i) in &order {
+        for &InReach { gap2, face: i, .. } in &order {
             let face = &self.faces()[i as usize];
             // A ray that met a face nearer than this one's gap (with a margin far above the
             // rounding of either) cannot meet this one first, nor as near.
@@ -340,10 +345,19 @@ impl WorldMap {
 struct Nearest {
     t: Vec<f64>,
     face: Vec<u32>,
-    order: Vec<(f64, u32)>,
+    order: Vec<InReach>,
     /// The order's buffers: faces by band of gap, and how many fall in each band.
-    sorted: Vec<(f64, u32)>,
+    sorted: Vec<InReach>,
     bands: Vec<u32>,
+}
+
+/// A face within the fan's reach: its number, the square of its gap to the origin in the plan,
+/// and the band of that gap.
+#[derive(Copy, Clone, Debug, Default)]
+struct InReach {
+    gap2: f64,
+    face: u32,
+    band: u32,
 }
 
 /// Width of the bands of gap the faces are ordered by, metres, and their number (the last holds
@@ -352,23 +366,22 @@ const BAND: f64 = 0.5;
 const BANDS: usize = 64;
 
 impl Nearest {
-    /// `order` (squared gaps and faces) near to far by bands of [`BAND`] metres, in one
-    /// counting pass: the sweep needs the near faces first, not an exact order.
-    fn by_gap(&mut self, order: &mut Vec<(f64, u32)>) {
-        let band = |gap2: f64| ((gap2.sqrt() * (1.0 / BAND)) as usize).min(BANDS - 1);
+    /// `order` near to far by bands of [`BAND`] metres, in one counting pass: the sweep needs
+    /// the near faces first, not an exact order.
+    fn by_gap(&mut self, order: &mut Vec<InReach>) {
         self.bands.clear();
         self.bands.resize(BANDS + 1, 0);
-        for &(gap2, _) in order.iter() {
-            self.bands[band(gap2) + 1] += 1;
+        for f in order.iter() {
+            self.bands[f.band as usize + 1] += 1;
         }
         for b in 1..=BANDS {
             self.bands[b] += self.bands[b - 1];
         }
         self.sorted.clear();
-        self.sorted.resize(order.len(), (0.0, 0));
-        for &(gap2, i) in order.iter() {
-            let slot = &mut self.bands[band(gap2)];
-            self.sorted[*slot as usize] = (gap2, i);
+        self.sorted.resize(order.len(), InReach::default());
+        for &f in order.iter() {
+            let slot = &mut self.bands[f.band as usize];
+            self.sorted[*slot as usize] = f;
             *slot += 1;
         }
         core::mem::swap(order, &mut self.sorted);

@@ -287,26 +287,32 @@ impl WorldMap {
         let start = hint
             .filter(|&i| i < self.faces.len() && !is_vertical(dir))
             .and_then(|i| Some((self.face_crossing(i, origin, dir, max)?, i as u32)));
-        let nearest = match &self.walk {
-            Some(walk) if !is_vertical(dir) => {
-                walk.cast(origin, dir, max, start.unwrap_or(NO_FACE), |i| {
-                    self.face_crossing(i, origin, dir, max)
-                })
-            }
-            _ => self.cast_faces_from(origin, dir, max, start),
-        };
-        self.fan_hit(origin, dir, max, nearest)
+        self.fan_hit(origin, dir, max, self.walk_faces(origin, dir, max, start))
     }
 
     /// The nearest vertical face along the ray within `max` metres and its distance, or
     /// `u32::MAX` for none, by walking the plan's grid (down the tree in a world without one).
     #[inline]
     pub(super) fn cast_faces(&self, origin: [f64; 3], dir: [f64; 3], max: f64) -> (f64, u32) {
+        self.walk_faces(origin, dir, max, None)
+    }
+
+    /// [`WorldMap::cast_faces`] from a face the ray is known to cross, and where (`start`).
+    #[inline]
+    fn walk_faces(
+        &self,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        max: f64,
+        start: Option<(f64, u32)>,
+    ) -> (f64, u32) {
         match &self.walk {
-            Some(walk) if !is_vertical(dir) => walk.cast(origin, dir, max, NO_FACE, |i| {
-                self.face_crossing(i, origin, dir, max)
-            }),
-            _ => self.cast_faces_from(origin, dir, max, None),
+            Some(walk) if !is_vertical(dir) => {
+                walk.cast(origin, dir, max, start.unwrap_or(NO_FACE), |i| {
+                    self.face_crossing(i, origin, dir, max)
+                })
+            }
+            _ => self.cast_faces_from(origin, dir, max, start),
         }
     }
 
@@ -378,13 +384,10 @@ impl WorldMap {
     #[inline]
     pub(super) fn face_hit(&self, i: usize, t: f64, dir: [f64; 3]) -> Hit {
         let [nx, ny] = self.normals[i];
-        // Turned to face the ray, without a branch (which side a beam sees changes often).
-        let facing = if nx * dir[0] + ny * dir[1] > 0.0 {
-            -1.0
-        } else {
-            1.0
-        };
-        let normal = [nx * facing, ny * facing, 0.0];
+        let mut normal = [nx, ny, 0.0];
+        if normal[0] * dir[0] + normal[1] * dir[1] > 0.0 {
+            normal = [-normal[0], -normal[1], 0.0];
+        }
         Hit {
             distance: t,
             surface: Surface::Face(i),
@@ -686,6 +689,51 @@ size = [1.0, 0.6]
         // Above the low box: 0.3 m over its top.
         assert!((map.distance_3d([-1.0, 2.0, 0.8]) - 0.3).abs() < 1e-12);
         assert!((map.clearance([0.0, 0.0]) - 1.0).abs() < 1e-12);
+    }
+
+    /// Absurd rays — not-a-number or infinite origins and directions, an infinite or negative
+    /// range, a direction of almost nothing — end, on the walk and down the tree alike, with
+    /// no panic and no NaN in what they answer.
+    #[test]
+    fn absurd_rays_end_without_a_nan() {
+        let map = square();
+        let (nan, inf) = (f64::NAN, f64::INFINITY);
+        let origins = [
+            [1.0, 1.0, 1.0],
+            [nan, 1.0, 1.0],
+            [inf, -inf, 1.0],
+            [1e300, 1.0, 1.0],
+        ];
+        let dirs = [
+            [1.0, 0.0, 0.0],
+            [nan, nan, 0.0],
+            [inf, 0.0, 0.0],
+            [1e-250, 1.0, 0.0],
+            [1e-300, -1e-300, 1.0],
+        ];
+        for origin in origins {
+            for dir in dirs {
+                for max in [32.0, inf, -1.0, 0.0] {
+                    for hit in [
+                        map.cast(origin, dir, max),
+                        map.cast_down_tree(origin, dir, max),
+                        map.cast_near(origin, dir, max, Some(0)),
+                    ]
+                    .into_iter()
+                    .flatten()
+                    {
+                        assert!(!hit.distance.is_nan(), "{origin:?} {dir:?} {max}: {hit:?}");
+                        assert!(hit.normal.iter().all(|v| !v.is_nan()), "{hit:?}");
+                    }
+                }
+            }
+        }
+        // A sane ray still meets its wall on both paths.
+        let (walked, tree) = (
+            map.cast([1.0, 1.0, 1.0], [1.0, 0.0, 0.0], 32.0),
+            map.cast_down_tree([1.0, 1.0, 1.0], [1.0, 0.0, 0.0], 32.0),
+        );
+        assert!(walked.is_some() && walked == tree, "{walked:?} {tree:?}");
     }
 
     #[test]

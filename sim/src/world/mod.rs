@@ -11,6 +11,8 @@ pub mod score;
 mod walk;
 
 pub use fan::{FAN_MAX_FACES, FanCast, PlaneFan};
+pub use index::SurfaceId;
+pub use map::{Cap, Face, Hit, PointKind, Surface, WorldMap, point_segment_distance};
 
 /// Per-cell lists packed into one: cell `k`'s items are `items[starts[k]..starts[k + 1]]`.
 fn packed<T>(lists: Vec<Vec<T>>) -> (Vec<u32>, Vec<T>) {
@@ -23,5 +25,3 @@ fn packed<T>(lists: Vec<Vec<T>>) -> (Vec<u32>, Vec<T>) {
     }
     (starts, items)
 }
-pub use index::SurfaceId;
-pub use map::{Cap, Face, Hit, PointKind, Surface, WorldMap, point_segment_distance};

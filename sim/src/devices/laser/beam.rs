@@ -170,7 +170,7 @@ impl<'a> Pulses<'a> {
     /// Follows one pulse from `origin` along the unit direction `dir`.
     pub fn trace(&self, origin: [f64; 3], dir: [f64; 3], rng: &mut SimRng) -> Echo {
         let first = (self.max_range > 0.0)
-            .then(|| self.cast(origin, dir, self.max_range, &None))
+            .then(|| self.cast(origin, dir, self.max_range, None))
             .flatten();
         self.trace_from(origin, dir, first.as_ref(), rng)
     }
@@ -227,11 +227,11 @@ impl<'a> Pulses<'a> {
 
     /// What a leg from `origin` along `dir` meets first within `max`.
     #[inline]
-    fn cast(&self, origin: [f64; 3], dir: [f64; 3], max: f64, hint: &Option<usize>) -> Option<Hit> {
+    fn cast(&self, origin: [f64; 3], dir: [f64; 3], max: f64, hint: Option<usize>) -> Option<Hit> {
         if self.down_tree {
             self.map.cast_down_tree(origin, dir, max)
         } else {
-            self.map.cast_near(origin, dir, max, *hint)
+            self.map.cast_near(origin, dir, max, hint)
         }
     }
 
@@ -259,7 +259,7 @@ impl<'a> Pulses<'a> {
                 let wall = first.map(|&hit| Contact::from(hit));
                 nearer_disc(wall, self.others.iter(), o, d, remaining)
             } else {
-                let wall = self.cast(o, d, remaining, hint);
+                let wall = self.cast(o, d, remaining, *hint);
                 if leg == 1
                     && let Some(Hit {
                         surface: Surface::Face(i),
