@@ -269,7 +269,7 @@ impl WorldMap {
             origin,
             dir,
             max,
-            self.cast_faces_down_tree(origin, dir, max),
+            self.cast_faces_from(origin, dir, max, None),
         )
     }
 
@@ -316,19 +316,9 @@ impl WorldMap {
         }
     }
 
-    /// [`WorldMap::cast_faces`] down the tree.
-    pub(super) fn cast_faces_down_tree(
-        &self,
-        origin: [f64; 3],
-        dir: [f64; 3],
-        max: f64,
-    ) -> (f64, u32) {
-        self.cast_faces_from(origin, dir, max, None)
-    }
-
-    /// [`WorldMap::cast_faces_down_tree`] with a face the ray is known to cross, and where
-    /// (`start`), so only nearer boxes are searched. Ties keep the face listed first, as
-    /// without it.
+    /// The nearest vertical face along the ray down the tree, from a face the ray is known to
+    /// cross, and where (`start`), so only nearer boxes are searched. Ties keep the face listed
+    /// first, as without it.
     fn cast_faces_from(
         &self,
         origin: [f64; 3],
