@@ -109,6 +109,9 @@ fn robots_of_a_fleet_see_each_other() {
         Pose2::new(3.0, 0.0, std::f64::consts::PI),
     ];
     let mut fleet = Fleet::new(&world, &robot, &NoiseSettings::NONE, 1, &starts).unwrap();
+    // One map of the world, built once, shared by every robot.
+    let robots = fleet.robots();
+    assert!(std::sync::Arc::ptr_eq(robots[0].map(), robots[1].map()));
     let middle: Vec<Mutex<Vec<u16>>> = (0..2).map(|_| Mutex::new(Vec::new())).collect();
     for _ in 0..60 {
         fleet.step(|k, twin| {

@@ -85,6 +85,9 @@ pub struct RunRecord {
     /// The files built beside the simulation as the scans came, when the run did
     /// (`twin run`); `None` when it did not, and they are built from the record afterwards.
     pub streamed: Option<Streamed>,
+    /// The map of the world the twin cast its rays in: what the files and the checks ask their
+    /// questions about the world of, without building it again.
+    pub world_map: std::sync::Arc<crate::world::WorldMap>,
 }
 
 /// What a run built from its scans while it went on (`crate::output::ScanStream`).

@@ -43,16 +43,18 @@ pub struct Recorder<W: Write + Seek> {
     writer: mcap::Writer<W>,
     channels: BTreeMap<String, u16>,
     sequence: u32,
+    /// The message being written, encoded: one buffer for every message.
+    scratch: Vec<u8>,
 }
 
 impl Recorder<std::io::BufWriter<std::fs::File>> {
     /// A recording into a new file at `path`.
     pub fn create(path: &Path) -> Result<Self, RecordError> {
-        let file = std::fs::File::create(path).map_err(|source| RecordError::Io {
+        let file = super::create_file(path).map_err(|source| RecordError::Io {
             file: path.display().to_string(),
             source,
         })?;
-        Recorder::new(std::io::BufWriter::new(file))
+        Recorder::new(std::io::BufWriter::with_capacity(1 << 20, file))
     }
 }
 
@@ -68,17 +70,22 @@ impl<W: Write + Seek> Recorder<W> {
             writer,
             channels: BTreeMap::new(),
             sequence: 0,
+            scratch: Vec::new(),
         })
     }
 
     /// Writes `msg` on `topic`, stamped `at` (its channel and schema added on first use).
-    pub fn write<M: Ros2Message>(
+    pub fn write<M: Ros2Message + ?Sized>(
         &mut self,
         topic: &str,
         at: Stamp,
         msg: &M,
     ) -> Result<(), RecordError> {
-        self.write_encoded(topic, at, &Encoded::of(msg))
+        let mut cdr = std::mem::take(&mut self.scratch);
+        msg.write_cdr(&mut cdr);
+        let written = self.write_cdr(topic, at, (M::NAME, M::definition), &cdr);
+        self.scratch = cdr;
+        written
     }
 
     /// Writes an encoded message on `topic`, stamped `at`.
@@ -88,12 +95,23 @@ impl<W: Write + Seek> Recorder<W> {
         at: Stamp,
         msg: &Encoded,
     ) -> Result<(), RecordError> {
+        self.write_cdr(topic, at, (msg.name, msg.definition), &msg.cdr)
+    }
+
+    /// Writes `cdr`, a message of the type named, on `topic`, stamped `at`.
+    fn write_cdr(
+        &mut self,
+        topic: &str,
+        at: Stamp,
+        (name, definition): (&str, fn() -> String),
+        cdr: &[u8],
+    ) -> Result<(), RecordError> {
         let channel_id = match self.channels.get(topic) {
             Some(&id) => id,
             None => {
-                let schema =
-                    self.writer
-                        .add_schema(msg.name, "ros2msg", (msg.definition)().as_bytes())?;
+                let schema = self
+                    .writer
+                    .add_schema(name, "ros2msg", definition().as_bytes())?;
                 let id = self
                     .writer
                     .add_channel(schema, topic, "cdr", &BTreeMap::new())?;
@@ -109,7 +127,7 @@ impl<W: Write + Seek> Recorder<W> {
                 log_time: at.0,
                 publish_time: at.0,
             },
-            &msg.cdr,
+            cdr,
         )?;
         Ok(())
     }

@@ -24,11 +24,30 @@ pub trait Ros2Message {
     /// Writes the fields (after the encapsulation header) into `w`.
     fn encode(&self, w: &mut CdrWriter);
 
+    /// About how many bytes the message takes in CDR: room reserved at once, so that encoding
+    /// copies the fields once instead of growing the buffer as it goes.
+    fn size_hint(&self) -> usize {
+        256
+    }
+
     /// The message in CDR, encapsulation header first.
     fn to_cdr(&self) -> Vec<u8> {
-        let mut w = CdrWriter::new();
+        let mut bytes = Vec::new();
+        self.write_cdr(&mut bytes);
+        bytes
+    }
+
+    /// The message in CDR into `bytes`, replacing what it held (its room is kept: a writer of
+    /// many messages encodes them all into one buffer).
+    fn write_cdr(&self, bytes: &mut Vec<u8>) {
+        bytes.clear();
+        bytes.reserve(self.size_hint());
+        bytes.extend_from_slice(&ENCAPSULATION_LE);
+        let mut w = CdrWriter {
+            buf: std::mem::take(bytes),
+        };
         self.encode(&mut w);
-        w.into_bytes()
+        *bytes = w.buf;
     }
 }
 
@@ -46,7 +65,7 @@ pub struct Encoded {
 
 impl Encoded {
     /// `msg`, encoded.
-    pub fn of<M: Ros2Message>(msg: &M) -> Self {
+    pub fn of<M: Ros2Message + ?Sized>(msg: &M) -> Self {
         Encoded {
             name: M::NAME,
             definition: M::definition,
@@ -65,16 +84,6 @@ pub struct CdrWriter {
 const ENCAPSULATION_LE: [u8; 4] = [0, 1, 0, 0];
 
 impl CdrWriter {
-    fn new() -> Self {
-        CdrWriter {
-            buf: ENCAPSULATION_LE.to_vec(),
-        }
-    }
-
-    fn into_bytes(self) -> Vec<u8> {
-        self.buf
-    }
-
     fn align(&mut self, n: usize) {
         while !(self.buf.len() - 4).is_multiple_of(n) {
             self.buf.push(0);
@@ -100,17 +109,13 @@ impl CdrWriter {
         self.buf.extend_from_slice(&v.to_le_bytes());
     }
 
-    fn f64(&mut self, v: f64) {
-        self.align(8);
-        self.buf.extend_from_slice(&v.to_le_bytes());
-    }
-
     fn len(&mut self, n: usize) {
         self.u32(u32::try_from(n).unwrap_or(u32::MAX));
     }
 
     fn string(&mut self, s: &str) {
         self.len(s.len() + 1);
+        self.buf.reserve(s.len() + 1);
         self.buf.extend_from_slice(s.as_bytes());
         self.buf.push(0);
     }
@@ -126,8 +131,22 @@ impl CdrWriter {
         self.string(&h.frame_id);
     }
 
+    /// A run of doubles: aligned once, since each keeps the next aligned.
     fn f64s(&mut self, values: &[f64]) {
-        values.iter().for_each(|&v| self.f64(v));
+        self.align(8);
+        self.buf.reserve(values.len() * 8);
+        values
+            .iter()
+            .for_each(|v| self.buf.extend_from_slice(&v.to_le_bytes()));
+    }
+
+    /// A run of floats: aligned once, since each keeps the next aligned.
+    fn f32s(&mut self, values: &[f32]) {
+        self.align(4);
+        self.buf.reserve(values.len() * 4);
+        values
+            .iter()
+            .for_each(|v| self.buf.extend_from_slice(&v.to_le_bytes()));
     }
 }
 
@@ -247,8 +266,11 @@ impl Ros2Message for LaserScanMsg {
         }
         for seq in [&self.ranges, &self.intensities] {
             w.len(seq.len());
-            seq.iter().for_each(|&v| w.f32(v));
+            w.f32s(seq);
         }
+    }
+    fn size_hint(&self) -> usize {
+        96 + self.header.frame_id.len() + 4 * (self.ranges.len() + self.intensities.len())
     }
 }
 
@@ -447,6 +469,7 @@ impl Ros2Message for PointCloudMsg {
         w.u32(12);
         w.len(12 * self.points.len());
         w.len(12 * self.points.len());
+        w.buf.reserve(12 * self.points.len() + 8);
         for p in &self.points {
             for v in p {
                 w.buf.extend_from_slice(&v.to_le_bytes());
@@ -480,7 +503,25 @@ impl Ros2Message for StringMsg {
         "string data\n".to_string()
     }
     fn encode(&self, w: &mut CdrWriter) {
-        w.string(&self.0);
+        self.0.as_str().encode(w);
+    }
+    fn size_hint(&self) -> usize {
+        self.0.as_str().size_hint()
+    }
+}
+
+/// Borrowed text as `std_msgs/String`: the same bytes as [`StringMsg`], without a copy of the
+/// text to own.
+impl Ros2Message for str {
+    const NAME: &'static str = StringMsg::NAME;
+    fn definition() -> String {
+        StringMsg::definition()
+    }
+    fn encode(&self, w: &mut CdrWriter) {
+        w.string(self);
+    }
+    fn size_hint(&self) -> usize {
+        16 + self.len()
     }
 }
 
@@ -827,6 +868,43 @@ mod tests {
         assert_eq!(
             CdrReader::new(&bytes).unwrap().laser_scan().unwrap(),
             scan()
+        );
+    }
+
+    #[test]
+    fn one_buffer_encodes_each_message_as_if_alone() {
+        let long = LaserScanMsg {
+            ranges: (0..1000).map(|i| i as f32 * 0.01).collect(),
+            ..scan()
+        };
+        let odom = OdometryMsg {
+            header: Header::new(Stamp(3), "odom"),
+            child_frame_id: "base_link".into(),
+            pose: Transform::planar(Pose2::new(1.0, 2.0, 3.0)),
+            pose_covariance: [0.5; 36],
+            linear: [0.1, 0.2, 0.3],
+            angular: [0.4, 0.5, 0.6],
+            twist_covariance: [0.25; 36],
+        };
+        let text = "{\"call\":\"drive\"}";
+        let mut buffer = Vec::new();
+        long.write_cdr(&mut buffer);
+        assert_eq!(buffer, long.to_cdr());
+        scan().write_cdr(&mut buffer);
+        assert_eq!(
+            buffer,
+            scan().to_cdr(),
+            "nothing of the longer message is left"
+        );
+        odom.write_cdr(&mut buffer);
+        assert_eq!(CdrReader::new(&buffer).unwrap().odometry().unwrap(), odom);
+        text.write_cdr(&mut buffer);
+        // Borrowed text is the same std_msgs/String as owned text.
+        assert_eq!(buffer, StringMsg(text.into()).to_cdr());
+        assert_eq!(<str as Ros2Message>::NAME, StringMsg::NAME);
+        assert_eq!(
+            CdrReader::new(&buffer).unwrap().string_msg().unwrap().0,
+            text
         );
     }
 

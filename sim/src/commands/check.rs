@@ -92,12 +92,12 @@ impl fmt::Display for CheckReport {
 
 /// Evaluates `scenario`'s checks on the run `record`.
 pub fn evaluate(scenario: &Scenario, record: &RunRecord) -> CheckReport {
-    let map = WorldMap::new(&scenario.world);
+    let map = &*record.world_map;
     let outcomes = scenario
         .checks
         .iter()
         .enumerate()
-        .map(|(i, check)| evaluate_one(i, check, scenario, record, &map))
+        .map(|(i, check)| evaluate_one(i, check, scenario, record, map))
         .collect();
     CheckReport {
         scenario: scenario.name.clone(),
@@ -229,12 +229,13 @@ fn evaluate_one(
         }
         CheckKind::OutlierShare => {
             let (mut ghosts, mut total) = (0usize, 0usize);
+            let mut kinds = crate::world::PointKinds::new(map);
             for r in &record.scans {
                 for k in 0..r.scan.len() {
                     if let Some(range) = r.scan.range_m(k) {
                         total += 1;
                         let p = r.frame.point(r.scan.angle(k), range);
-                        ghosts += usize::from(PointKind::of(map, p) == PointKind::Ghost);
+                        ghosts += usize::from(kinds.of(p) == PointKind::Ghost);
                     }
                 }
             }

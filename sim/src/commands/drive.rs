@@ -330,7 +330,7 @@ pub fn write_drive(
     };
     let mut text = serde_json::to_string_pretty(&summary)?;
     text.push('\n');
-    std::fs::write(file("summary.json"), text)?;
+    robot::logs::write_file(file("summary.json"), text)?;
     if let Some(recon) = &record.reconstruction {
         files.extend(crate::output::write_reconstruction(
             dir,

@@ -167,7 +167,7 @@ impl Replay {
         )?;
         let mut text = serde_json::to_string_pretty(summary)?;
         text.push('\n');
-        std::fs::write(&files[3], text)?;
+        robot::logs::write_file(&files[3], text)?;
         let placed = self
             .placed
             .iter()

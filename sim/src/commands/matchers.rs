@@ -467,8 +467,8 @@ pub fn main(args: MatchersArgs) -> Result<(), CommandError> {
         };
         std::fs::create_dir_all(dir).map_err(write)?;
         let json = serde_json::to_string_pretty(&rows).expect("rows serialise");
-        std::fs::write(dir.join("matchers.json"), json + "\n").map_err(write)?;
-        std::fs::write(dir.join("pairs.csv"), lines.join("\n") + "\n").map_err(write)?;
+        robot::logs::write_file(dir.join("matchers.json"), json + "\n").map_err(write)?;
+        robot::logs::write_file(dir.join("pairs.csv"), lines.join("\n") + "\n").map_err(write)?;
     }
     Ok(())
 }

@@ -477,12 +477,12 @@ pub fn run_scenario(
             SceneInput::of(&r.scan, r.odometry, r.scene, &mount, Some(r.truth))
         })
         .collect();
-    let map = (!inputs.is_empty()).then(|| crate::world::WorldMap::new(&scenario.world));
+    let world_map = std::sync::Arc::clone(robot.twin().map());
     let reconstruction = reconstruct(
         &inputs,
         localisation.as_ref().map(|l| l.placed.as_slice()),
         &scenario.reconstruction.mesh,
-        map.as_ref(),
+        (!inputs.is_empty()).then_some(&*world_map),
         scenario.reconstruction.sweep,
     )
     .map_err(|source| RunError::Reconstruction {
@@ -512,6 +512,7 @@ pub fn run_scenario(
         tape,
         decisions,
         streamed: stream.map(ScanStream::finish),
+        world_map,
     })
 }
 

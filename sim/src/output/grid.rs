@@ -31,8 +31,8 @@ pub(super) fn write_grid_files(
         return Ok(Vec::new());
     };
     let (pgm, yaml) = (dir.join("map.pgm"), dir.join("map.yaml"));
-    std::fs::write(&pgm, grid.pgm())?;
-    std::fs::write(&yaml, grid.yaml("map.pgm"))?;
+    robot::logs::write_file(&pgm, grid.pgm())?;
+    robot::logs::write_file(&yaml, grid.yaml("map.pgm"))?;
     Ok(vec![pgm, yaml])
 }
 

@@ -42,7 +42,7 @@ pub fn occupied_cells(points: &[[f64; 2]]) -> HashSet<(i64, i64)> {
 /// Writes the panels side by side, on one common scale, each with a grid in metres, the path
 /// and its start; a legend and a scale bar below.
 pub fn write_log_map_svg(path: &Path, panels: &[Panel<'_>]) -> std::io::Result<()> {
-    std::fs::write(path, render(panels))
+    robot::logs::write_file(path, render(panels))
 }
 
 const CELLS: &str = "#1f3b73";

@@ -24,7 +24,7 @@ use robot::hardware::{HeadAngles, LaserScan, SPEED_OF_SOUND, echo_distance_m};
 use robot::logs::mcap::Recorder;
 use robot::logs::ros2::{
     ClockMsg, Encoded, Header, LaserScanMsg, LogMsg, OdometryMsg, PointCloudMsg, PoseStampedMsg,
-    RangeMsg, StringMsg, TfMessage, Transform, TransformStamped,
+    RangeMsg, TfMessage, Transform, TransformStamped,
 };
 use robot::mount::LaserMount;
 use robot::{Pose2, Stamp};
@@ -276,11 +276,14 @@ fn write(path: &Path, r: &Recording) -> Result<u32, robot::logs::mcap::RecordErr
     let written = r.tape_json.filter(|json| json.len() == r.tape.len());
     for (i, exchange) in r.tape.iter().enumerate() {
         at = exchange.stamp().map_or(at, |s| s.max(at));
-        let json = match written {
-            Some(json) => json[i].clone(),
-            None => tape_json(exchange),
-        };
-        rec.write(robot::logs::mcap::TAPE_TOPIC, at, &StringMsg(json))?;
+        match written {
+            Some(json) => rec.write(robot::logs::mcap::TAPE_TOPIC, at, json[i].as_str())?,
+            None => rec.write(
+                robot::logs::mcap::TAPE_TOPIC,
+                at,
+                tape_json(exchange).as_str(),
+            )?,
+        }
     }
     let n = rec.messages();
     rec.finish()?;

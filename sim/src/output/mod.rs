@@ -47,7 +47,7 @@ pub fn write_decisions(
     decisions: &[crate::record::DecisionRecord],
 ) -> std::io::Result<()> {
     use std::io::Write;
-    let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
+    let mut out = std::io::BufWriter::new(robot::logs::create_file(path)?);
     for d in decisions {
         serde_json::to_writer(&mut out, d)?;
         out.write_all(b"\n")?;
@@ -197,9 +197,8 @@ pub struct Written {
 pub fn write_all(record: &RunRecord, scenario: &Scenario, dir: &Path) -> std::io::Result<Written> {
     std::fs::create_dir_all(dir)?;
     let path = |name: &str| dir.join(name);
-    // One map of the world answers every picture's and file's questions about it.
-    let map = crate::world::WorldMap::new(&scenario.world);
-    let map = &map;
+    // The twin's map of the world answers every picture's and file's questions about it.
+    let map = &*record.world_map;
     let (pictures, recording_file, grid, reconstruction, rest) = std::thread::scope(|s| {
         let pictures = s.spawn(|| -> std::io::Result<Vec<PathBuf>> {
             let mut files = vec![path("map.svg"), path("world.json")];
@@ -245,7 +244,7 @@ pub fn write_all(record: &RunRecord, scenario: &Scenario, dir: &Path) -> std::io
             }
             files.push(path("scans.jsonl"));
             match &record.streamed {
-                Some(built) => std::fs::write(path("scans.jsonl"), &built.scan_lines)?,
+                Some(built) => robot::logs::write_file(path("scans.jsonl"), &built.scan_lines)?,
                 None => write_scans(&path("scans.jsonl"), &record.scans, &scenario.robot.mount())?,
             }
             files.push(path("summary.json"));

@@ -11,7 +11,7 @@ use std::path::Path;
 /// Writes `model` to `path`: `vertex` with `x y z nx ny nz` (float) and `scene` (ushort), and,
 /// unless `points_only`, `face` with `vertex_indices` (uchar count, uint indices).
 pub fn write_ply(path: &Path, model: &Model, points_only: bool) -> std::io::Result<()> {
-    let mut out = BufWriter::new(std::fs::File::create(path)?);
+    let mut out = BufWriter::new(robot::logs::create_file(path)?);
     let faces = if points_only {
         0
     } else {

@@ -166,7 +166,7 @@ pub fn write_reconstruction(
     let json = dir.join("reconstruction.json");
     let mut text = serde_json::to_string_pretty(&reconstruction_file(recon))?;
     text.push('\n');
-    std::fs::write(&json, text)?;
+    robot::logs::write_file(&json, text)?;
     let png = dir.join("model.png");
     let mut stations: Vec<(usize, robot::Pose2)> = Vec::new();
     for s in &main.model.scenes {

@@ -610,7 +610,7 @@ pub fn write_model_png(path: &Path, pic: &Picture<'_>) -> std::io::Result<()> {
         INK,
     );
 
-    let file = std::fs::File::create(path)?;
+    let file = robot::logs::create_file(path)?;
     let mut encoder = png::Encoder::new(BufWriter::new(file), WIDTH as u32, HEIGHT as u32);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);

@@ -204,7 +204,7 @@ pub fn write_scans(path: &Path, records: &[ScanRecord], mount: &LaserMount) -> s
 
 /// Writes one JSON object per line.
 pub fn write_scan_lines(path: &Path, lines: impl Iterator<Item = ScanLine>) -> std::io::Result<()> {
-    let mut out = BufWriter::new(std::fs::File::create(path)?);
+    let mut out = BufWriter::new(robot::logs::create_file(path)?);
     for line in lines {
         write_scan_line(&mut out, &line)?;
     }

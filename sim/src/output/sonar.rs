@@ -43,5 +43,5 @@ pub fn write_sonar(path: &Path, record: &SonarRecord) -> std::io::Result<()> {
     };
     let mut text = serde_json::to_string_pretty(&ring)?;
     text.push('\n');
-    std::fs::write(path, text)
+    robot::logs::write_file(path, text)
 }

@@ -141,6 +141,6 @@ impl Summary {
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
         let mut text = serde_json::to_string_pretty(self)?;
         text.push('\n');
-        std::fs::write(path, text)
+        robot::logs::write_file(path, text)
     }
 }

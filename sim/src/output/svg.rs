@@ -92,7 +92,7 @@ pub fn write_map_svg(
     world: &WorldDescription,
     map: &WorldMap,
 ) -> std::io::Result<()> {
-    std::fs::write(path, render(record, world, map))
+    robot::logs::write_file(path, render(record, world, map))
 }
 
 fn render(record: &RunRecord, world: &WorldDescription, map: &WorldMap) -> String {
@@ -398,6 +398,7 @@ fn classify_points(record: &RunRecord, map: &WorldMap) -> ScanPoints {
     let stride = total.div_ceil(MAX_POINTS).max(1);
     let mut out = ScanPoints::default();
     let mut skip = stride;
+    let mut kinds = crate::world::PointKinds::new(map);
     // Each beam's sine and cosine, computed again only for a scan of other angles.
     let mut beams: ((f64, f64), Vec<(f64, f64)>) = ((f64::NAN, f64::NAN), Vec::new());
     for r in &record.scans {
@@ -432,7 +433,7 @@ fn classify_points(record: &RunRecord, map: &WorldMap) -> ScanPoints {
             skip = stride;
             let trig = beams.1[i];
             let p = point(&r.frame, axes, trig, range);
-            let target = match PointKind::of(map, p) {
+            let target = match kinds.of(p) {
                 PointKind::Ghost => &mut out.ghosts,
                 PointKind::Floor => &mut out.floor,
                 PointKind::Surface => &mut out.seen,

@@ -36,7 +36,7 @@ pub fn write_tilted_svg(
     map: &WorldMap,
     scenario: &str,
 ) -> std::io::Result<()> {
-    std::fs::write(path, render(scan, world, map, scenario))
+    robot::logs::write_file(path, render(scan, world, map, scenario))
 }
 
 struct Point {
@@ -61,6 +61,7 @@ const LASER: &str = "#d73027";
 fn render(r: &ScanRecord, world: &WorldDescription, map: &WorldMap, scenario: &str) -> String {
     let frame = r.frame;
     let (sy, cy) = frame.yaw.sin_cos();
+    let mut kinds = crate::world::PointKinds::new(map);
     let points: Vec<Point> = (0..r.scan.len())
         .filter_map(|i| {
             let angle = r.scan.angle(i);
@@ -70,7 +71,7 @@ fn render(r: &ScanRecord, world: &WorldDescription, map: &WorldMap, scenario: &s
                 angle,
                 range,
                 xy: [p[0], p[1]],
-                kind: PointKind::of(map, p),
+                kind: kinds.of(p),
             })
         })
         .collect();

@@ -8,7 +8,7 @@ use std::path::Path;
 /// Writes `poses` to `path`: time in seconds with nine decimals, position in metres with six,
 /// the heading as a unit quaternion about z with nine.
 pub fn write_tum(path: &Path, poses: impl Iterator<Item = (Stamp, Pose2)>) -> std::io::Result<()> {
-    let mut out = BufWriter::new(std::fs::File::create(path)?);
+    let mut out = BufWriter::new(robot::logs::create_file(path)?);
     writeln!(out, "# t x y z qx qy qz qw")?;
     for (t, p) in poses {
         let [qx, qy, qz, qw] = p.quaternion();

@@ -97,5 +97,5 @@ pub fn write_world_json(path: &Path, scenario: &Scenario, map: &WorldMap) -> std
     };
     let mut text = serde_json::to_string(&world)?;
     text.push('\n');
-    std::fs::write(path, text)
+    robot::logs::write_file(path, text)
 }

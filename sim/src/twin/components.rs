@@ -39,9 +39,10 @@ pub struct SimClock {
 #[derive(Resource)]
 pub struct Physics(pub PhysicsWorld);
 
-/// The static surfaces, for ray casts.
+/// The static surfaces, for ray casts: shared with the fleet's other robots and with the run's
+/// record, which draws and checks against the same map.
 #[derive(Resource)]
-pub struct Map(pub WorldMap);
+pub struct Map(pub std::sync::Arc<WorldMap>);
 
 /// Whether a step in which a robot alone (not one of a fleet) moves clear of every wall is
 /// integrated without rapier's solver ([`super::systems::step_physics`]): on unless a reference

@@ -57,6 +57,7 @@ impl Fleet {
         seed: u64,
         starts: &[Pose2],
     ) -> Result<Fleet, ConfigError> {
+        let map = Arc::new(crate::world::WorldMap::new(world));
         let robots = starts
             .iter()
             .enumerate()
@@ -64,7 +65,7 @@ impl Fleet {
                 let mut world = world.clone();
                 world.start = start;
                 let seed = Self::robot_seed(seed, k);
-                Twin::new(&world, robot, noise, seed).map_err(|mut e| {
+                Twin::in_map(&world, Arc::clone(&map), robot, noise, seed).map_err(|mut e| {
                     e.message = format!(
                         "robot {k} at ({:.2}, {:.2}): {}",
                         start.x, start.y, e.message

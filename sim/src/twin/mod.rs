@@ -36,6 +36,7 @@ use robot::hardware::LaserScan;
 use robot::odometry::History;
 use robot::{Pose2, Stamp};
 use std::collections::VecDeque;
+use std::sync::Arc;
 
 /// A running twin: one robot in one world.
 pub struct Twin {
@@ -55,7 +56,19 @@ impl Twin {
         noise: &NoiseSettings,
         seed: u64,
     ) -> Result<Twin, ConfigError> {
-        let map = WorldMap::new(world_desc);
+        let map = Arc::new(WorldMap::new(world_desc));
+        Twin::in_map(world_desc, map, robot_desc, noise, seed)
+    }
+
+    /// As [`Twin::new`], in `map`, the map of `world_desc` already built (robots of one world
+    /// share it).
+    pub fn in_map(
+        world_desc: &WorldDescription,
+        map: Arc<WorldMap>,
+        robot_desc: &RobotDescription,
+        noise: &NoiseSettings,
+        seed: u64,
+    ) -> Result<Twin, ConfigError> {
         let start = world_desc.start;
         let radius = robot_desc.body.radius_m.get();
         let centre = start.transform_point(robot_desc.body.center_x_m.get(), 0.0);
@@ -442,6 +455,11 @@ impl Twin {
         self.world
             .get::<PanTiltUnit>(self.robot)
             .and_then(|u| u.history.at(t))
+    }
+
+    /// The map of the world the twin casts its rays in.
+    pub fn map(&self) -> &Arc<WorldMap> {
+        &self.world.resource::<Map>().0
     }
 
     /// The true pose of the base now.

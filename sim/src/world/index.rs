@@ -159,9 +159,33 @@ impl SurfaceIndex {
         caps: &[Cap],
         ceiling: f64,
     ) -> bool {
+        self.within_after(p, r, faces, caps, ceiling, &mut None)
+    }
+
+    /// [`Self::within`], trying `hint` first and leaving in it the surface found within `r`
+    /// (kept when none is). Points in a row (a scan's beams) mostly lie near the surface the
+    /// last one did: one distance then answers. The answer is `within`'s: any surface within
+    /// `r` makes the nearest one within `r`.
+    pub(super) fn within_after(
+        &self,
+        p: [f64; 3],
+        r: f64,
+        faces: &[Face],
+        caps: &[Cap],
+        ceiling: f64,
+        hint: &mut Option<SurfaceId>,
+    ) -> bool {
         // The square root of each squared distance, as `nearest` takes it of the least one
         // (the root is monotonic, so the least root is the root of the least).
         let near = |d2: f64| d2.sqrt() <= r;
+        let near_surface = |id: SurfaceId| match id {
+            SurfaceId::Face(n) => near(faces[n as usize].distance2(p)),
+            SurfaceId::Cap(n) => near(caps[n as usize].distance2(p)),
+            SurfaceId::Floor | SurfaceId::Ceiling => false,
+        };
+        if hint.is_some_and(near_surface) {
+            return true;
+        }
         if near(p[2] * p[2]) || near((ceiling - p[2]) * (ceiling - p[2])) {
             return true;
         }
@@ -178,13 +202,14 @@ impl SurfaceIndex {
         }
         // A surface within `r` of `p` is within the reach of `p`'s cell, so the cell lists it.
         let k = j * self.size[0] + i;
-        self.items[self.starts[k] as usize..self.starts[k + 1] as usize]
+        let found = self.items[self.starts[k] as usize..self.starts[k + 1] as usize]
             .iter()
-            .any(|&id| match id {
-                SurfaceId::Face(n) => near(faces[n as usize].distance2(p)),
-                SurfaceId::Cap(n) => near(caps[n as usize].distance2(p)),
-                SurfaceId::Floor | SurfaceId::Ceiling => false,
-            })
+            .copied()
+            .find(|&id| near_surface(id));
+        if found.is_some() {
+            *hint = found;
+        }
+        found.is_some()
     }
 
     /// Distance in the plan from `p` to the nearest face's segment (heights and caps ignored),
@@ -342,5 +367,47 @@ mod tests {
                 .fold(f64::INFINITY, f64::min);
             assert_eq!(map.clearance([p[0], p[1]]), plan, "clearance at {p:?}");
         }
+    }
+
+    /// Points in a row, most near the surface the last one was near (a scan's beams), with
+    /// jumps to other surfaces, to the floor, off the plan and into empty space: the kinds
+    /// found trying the last surface first are those found afresh for each point.
+    #[test]
+    fn kinds_of_points_in_a_row_are_the_kinds_of_each_point() {
+        use crate::world::{PointKind, PointKinds};
+        let lab = WorldDescription::load(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../worlds/lab.toml"),
+        )
+        .unwrap();
+        let map = WorldMap::new(&lab);
+        let mut rng = crate::rng::stream(11, "test");
+        let mut kinds = PointKinds::new(&map);
+        let faces = map.faces();
+        let mut seen = [0usize; 3];
+        for _ in 0..20_000 {
+            let p = if rng.random::<f64>() < 0.8 {
+                // On or near a face, within and beyond the ghost margin.
+                let f = &faces[rng.random_range(0..faces.len())];
+                let s = rng.random::<f64>();
+                let off = rng.random::<f64>() * 0.4 - 0.2;
+                let (dx, dy) = (f.b[0] - f.a[0], f.b[1] - f.a[1]);
+                let n = dx.hypot(dy).max(1e-9);
+                [
+                    f.a[0] + s * dx - off * dy / n,
+                    f.a[1] + s * dy + off * dx / n,
+                    rng.random::<f64>() * 2.2 - 0.1,
+                ]
+            } else {
+                [
+                    rng.random::<f64>() * 36.0 - 3.0,
+                    rng.random::<f64>() * 18.0 - 3.0,
+                    rng.random::<f64>() * 3.4 - 0.4,
+                ]
+            };
+            let kind = kinds.of(p);
+            assert_eq!(kind, PointKind::of(&map, p), "at {p:?}");
+            seen[kind as usize] += 1;
+        }
+        assert!(seen.iter().all(|&n| n > 500), "every kind met: {seen:?}");
     }
 }

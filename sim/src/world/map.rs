@@ -106,7 +106,34 @@ impl PointKind {
     /// What the world point `p` is: farther than 15 cm from every surface is a ghost, lower
     /// than 3 cm is the floor.
     pub fn of(map: &WorldMap, p: [f64; 3]) -> Self {
-        if !map.within_3d(p, GHOST_MARGIN) {
+        PointKinds::new(map).of(p)
+    }
+}
+
+/// [`PointKind::of`] for points one after another, trying first the surface the last point lay
+/// near: a scan's neighbouring beams mostly hit the same one, and one distance then answers.
+pub struct PointKinds<'a> {
+    map: &'a WorldMap,
+    last: Option<SurfaceId>,
+}
+
+impl<'a> PointKinds<'a> {
+    /// No point seen yet.
+    pub fn new(map: &'a WorldMap) -> Self {
+        PointKinds { map, last: None }
+    }
+
+    /// What the world point `p` is ([`PointKind::of`]).
+    pub fn of(&mut self, p: [f64; 3]) -> PointKind {
+        let m = self.map;
+        if !m.index.within_after(
+            p,
+            GHOST_MARGIN,
+            &m.faces,
+            &m.caps,
+            m.ceiling,
+            &mut self.last,
+        ) {
             PointKind::Ghost
         } else if p[2] < FLOOR_BAND {
             PointKind::Floor
@@ -161,6 +188,17 @@ pub struct WorldMap {
     /// The plan's grid that single rays walk; `None` without faces, or where the tree is
     /// faster (see [`WalkGrid::new`]).
     walk: Option<WalkGrid>,
+}
+
+impl std::fmt::Debug for WorldMap {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("WorldMap")
+            .field("faces", &self.faces.len())
+            .field("caps", &self.caps.len())
+            .field("ceiling", &self.ceiling)
+            .field("walked", &self.walk.is_some())
+            .finish_non_exhaustive()
+    }
 }
 
 impl WorldMap {

@@ -12,7 +12,7 @@ mod walk;
 
 pub use fan::{FAN_MAX_FACES, FanCast, PlaneFan};
 pub use index::SurfaceId;
-pub use map::{Cap, Face, Hit, PointKind, Surface, WorldMap, point_segment_distance};
+pub use map::{Cap, Face, Hit, PointKind, PointKinds, Surface, WorldMap, point_segment_distance};
 
 /// Per-cell lists packed into one: cell `k`'s items are `items[starts[k]..starts[k + 1]]`.
 fn packed<T>(lists: Vec<Vec<T>>) -> (Vec<u32>, Vec<T>) {

@@ -817,7 +817,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<(Summary, Vec<PathBuf>), St
         )));
     }
     std::fs::create_dir_all(out).map_err(io_error(out))?;
-    std::fs::write(out.join("study.toml"), &text).map_err(io_error(out))?;
+    robot::logs::write_file(out.join("study.toml"), &text).map_err(io_error(out))?;
     let expected = study.total_trials();
     if rows.len() as u64 != expected {
         return Err(StudyError::Merge(format!(

@@ -660,6 +660,6 @@ pub fn merge(
         )));
     }
     std::fs::create_dir_all(out).map_err(io_error(out))?;
-    std::fs::write(out.join("study.toml"), text).map_err(io_error(out))?;
+    robot::logs::write_file(out.join("study.toml"), text).map_err(io_error(out))?;
     write_results(&study, out, &trials)
 }

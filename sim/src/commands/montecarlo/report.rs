@@ -266,7 +266,7 @@ pub fn write_reports(
         source: e.into(),
     })?;
     json.push('\n');
-    std::fs::write(&files[0], json).map_err(io_error(&files[0]))?;
+    robot::logs::write_file(&files[0], json).map_err(io_error(&files[0]))?;
     let table = format!(
         "# {}\n\n{} trials per rate, seed {}; e_θ in degrees, e_t in millimetres, sd the sample standard deviation.\n\n{}",
         study.name,
@@ -274,8 +274,8 @@ pub fn write_reports(
         study.seed,
         summary.table()
     );
-    std::fs::write(&files[1], table).map_err(io_error(&files[1]))?;
-    std::fs::write(&files[2], errors_svg(study, records)).map_err(io_error(&files[2]))?;
+    robot::logs::write_file(&files[1], table).map_err(io_error(&files[1]))?;
+    robot::logs::write_file(&files[2], errors_svg(study, records)).map_err(io_error(&files[2]))?;
     Ok(files.to_vec())
 }
 
