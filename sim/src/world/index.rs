@@ -376,7 +376,7 @@ mod tests {
     fn kinds_of_points_in_a_row_are_the_kinds_of_each_point() {
         use crate::world::{PointKind, PointKinds};
         let lab = WorldDescription::load(
-            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../worlds/lab.toml"),
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../worlds/lab.toml"),
         )
         .unwrap();
         let map = WorldMap::new(&lab);
