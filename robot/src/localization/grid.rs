@@ -340,20 +340,28 @@ impl OccupancyGrid {
 
     /// Drops the rows and columns no beam reached, keeping a margin of ten cells.
     fn trim(&mut self) {
-        let seen = |i: usize| self.log_odds[i] != 0.0;
-        let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0, 0);
-        for y in 0..self.height {
-            for x in 0..self.width {
-                if seen(y * self.width + x) {
-                    x0 = x0.min(x);
-                    x1 = x1.max(x);
-                    y0 = y0.min(y);
-                    y1 = y1.max(y);
-                }
-            }
-        }
-        if x0 == usize::MAX {
+        // The bounds of the cells seen, looking only where they could still widen: the rows
+        // from each end to the first seen, then in each row between only the cells left of the
+        // leftmost and right of the rightmost seen so far (the grid grows with slack, and most
+        // of it is never seen).
+        let seen = |v: &f32| *v != 0.0;
+        let row = |y: usize| &self.log_odds[y * self.width..(y + 1) * self.width];
+        let Some(y0) = (0..self.height).find(|&y| row(y).iter().any(seen)) else {
             return;
+        };
+        let y1 = (y0..self.height)
+            .rev()
+            .find(|&y| row(y).iter().any(seen))
+            .unwrap_or(y0);
+        let (mut x0, mut x1) = (self.width, 0);
+        for y in y0..=y1 {
+            let cells = row(y);
+            if let Some(x) = cells[..x0].iter().position(seen) {
+                x0 = x;
+            }
+            if let Some(x) = cells[x1..].iter().rposition(seen) {
+                x1 += x;
+            }
         }
         let margin = 10;
         let (x0, y0) = (x0.saturating_sub(margin), y0.saturating_sub(margin));
@@ -473,6 +481,61 @@ impl OccupancyGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Trimming keeps every seen cell, where it was, with a margin of ten cells (less at the
+    /// grid's edges): the bounds found by looking everywhere.
+    #[test]
+    fn trimming_keeps_the_seen_cells_where_they_were() {
+        let (width, height) = (97, 61);
+        // A small generator of its own: the robot crate draws no random numbers.
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move |n: usize| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % n as u64) as usize
+        };
+        for case in 0..200 {
+            let mut log_odds = vec![0.0f32; width * height];
+            for _ in 0..case % 7 {
+                log_odds[next(width * height)] = if next(2) == 0 { 0.5 } else { -0.25 };
+            }
+            if case % 5 == 0 {
+                log_odds[next(width * height)] = -0.0;
+            }
+            let grid = OccupancyGrid {
+                config: GridConfig::default(),
+                origin: [1.0, -2.0],
+                width,
+                height,
+                log_odds: log_odds.clone(),
+            };
+            let mut trimmed = grid.clone();
+            trimmed.trim();
+            let seen: Vec<(usize, usize)> = (0..width * height)
+                .filter(|&i| log_odds[i] != 0.0)
+                .map(|i| (i % width, i / width))
+                .collect();
+            if seen.is_empty() {
+                assert_eq!(trimmed.size(), (width, height), "case {case}");
+                continue;
+            }
+            let x0 = seen.iter().map(|c| c.0).min().unwrap().saturating_sub(10);
+            let y0 = seen.iter().map(|c| c.1).min().unwrap().saturating_sub(10);
+            let x1 = (seen.iter().map(|c| c.0).max().unwrap() + 10).min(width - 1);
+            let y1 = (seen.iter().map(|c| c.1).max().unwrap() + 10).min(height - 1);
+            assert_eq!(trimmed.size(), (x1 - x0 + 1, y1 - y0 + 1), "case {case}");
+            let r = grid.config.resolution_m;
+            assert_eq!(
+                trimmed.origin(),
+                [1.0 + x0 as f64 * r, -2.0 + y0 as f64 * r]
+            );
+            for &(x, y) in &seen {
+                let i = (y - y0) * trimmed.width + (x - x0);
+                assert_eq!(trimmed.log_odds[i], log_odds[y * width + x], "case {case}");
+            }
+        }
+    }
 
     /// A square room 4 m wide seen from its centre by a 360° laser: its walls come out occupied,
     /// its inside free, the outside unknown.

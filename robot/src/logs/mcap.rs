@@ -54,7 +54,7 @@ impl Recorder<std::io::BufWriter<std::fs::File>> {
             file: path.display().to_string(),
             source,
         })?;
-        Recorder::new(std::io::BufWriter::with_capacity(1 << 20, file))
+        Recorder::new(std::io::BufWriter::with_capacity(1 << 18, file))
     }
 }
 
