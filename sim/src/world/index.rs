@@ -151,22 +151,12 @@ impl SurfaceIndex {
     /// Whether a surface lies at most `r` from `p`: `nearest(p).0 <= r`, to the last bit, with
     /// a look at `p`'s own cell only when `r` is within the cells' reach (the question a ghost
     /// test asks of every point: a ghost far from everything costs no search outwards).
+    ///
+    /// `hint`, a surface, is tried first, and is left holding the surface found within `r` (kept
+    /// when none is). Points in a row (a scan's beams) mostly lie near the surface the last one
+    /// did: one distance then answers. The answer is the same: any surface within `r` makes the
+    /// nearest one within `r`.
     pub(super) fn within(
-        &self,
-        p: [f64; 3],
-        r: f64,
-        faces: &[Face],
-        caps: &[Cap],
-        ceiling: f64,
-    ) -> bool {
-        self.within_after(p, r, faces, caps, ceiling, &mut None)
-    }
-
-    /// [`Self::within`], trying `hint` first and leaving in it the surface found within `r`
-    /// (kept when none is). Points in a row (a scan's beams) mostly lie near the surface the
-    /// last one did: one distance then answers. The answer is `within`'s: any surface within
-    /// `r` makes the nearest one within `r`.
-    pub(super) fn within_after(
         &self,
         p: [f64; 3],
         r: f64,

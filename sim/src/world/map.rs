@@ -126,7 +126,7 @@ impl<'a> PointKinds<'a> {
     /// What the world point `p` is ([`PointKind::of`]).
     pub fn of(&mut self, p: [f64; 3]) -> PointKind {
         let m = self.map;
-        if !m.index.within_after(
+        if !m.index.within(
             p,
             GHOST_MARGIN,
             &m.faces,
@@ -485,7 +485,7 @@ impl WorldMap {
     /// last bit, answered from `p`'s cell of the plan's grid when `r` is small.
     pub fn within_3d(&self, p: [f64; 3], r: f64) -> bool {
         self.index
-            .within(p, r, &self.faces, &self.caps, self.ceiling)
+            .within(p, r, &self.faces, &self.caps, self.ceiling, &mut None)
     }
 
     /// The surface nearest to `p` in 3D and its distance, through the plan's grid.
