@@ -19,7 +19,8 @@ use crate::time::Stamp;
 use std::collections::BTreeMap;
 use std::path::Path;
 
-/// A new, empty file at `path`, in place of any file there.
+/// A new, empty file at `path`, in place of any file there (a link there is replaced, not
+/// followed).
 ///
 /// An old file is removed first rather than truncated. On ext4 (its default `auto_da_alloc`),
 /// a file truncated to nothing and written again is pushed to the disk when it is closed, and
