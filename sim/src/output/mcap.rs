@@ -276,14 +276,12 @@ fn write(path: &Path, r: &Recording) -> Result<u32, robot::logs::mcap::RecordErr
     let written = r.tape_json.filter(|json| json.len() == r.tape.len());
     for (i, exchange) in r.tape.iter().enumerate() {
         at = exchange.stamp().map_or(at, |s| s.max(at));
-        match written {
-            Some(json) => rec.write(robot::logs::mcap::TAPE_TOPIC, at, json[i].as_str())?,
-            None => rec.write(
-                robot::logs::mcap::TAPE_TOPIC,
-                at,
-                tape_json(exchange).as_str(),
-            )?,
-        }
+        // The JSON built during the run, borrowed; built here when the run did not.
+        let json: std::borrow::Cow<'_, str> = match written {
+            Some(json) => json[i].as_str().into(),
+            None => tape_json(exchange).into(),
+        };
+        rec.write(robot::logs::mcap::TAPE_TOPIC, at, &*json)?;
     }
     let n = rec.messages();
     rec.finish()?;
