@@ -1,6 +1,6 @@
 //! Issue 4: localisation that runs unchanged on the twin and the real robot.
 //!
-//! The four matchers on twin scan pairs with known truth (small motions, 2 % and 20 % uniform
+//! Every matcher on twin scan pairs with known truth (small motions, 2 % and 20 % uniform
 //! outliers, 25° turns), the L-corridor of 002 App. E built from its wall equations, the map
 //! builder on a twin run and on the real MIT CSAIL log, and the `twin map` / `twin match`
 //! interfaces with their bad-input behaviour.

@@ -81,7 +81,7 @@ impl Reference {
 ///
 /// Implementations are plain data (their parameters) and may be shared between threads.
 pub trait ScanMatcher: Send + Sync + fmt::Debug {
-    /// The short name (`ls`, `lorentz`, `lorentz-lines`, `mbicp`).
+    /// The short name (`ls`, `lorentz`, `lorentz-lines`, `mbicp`, `pl-icp`).
     fn name(&self) -> &'static str;
 
     /// Aligns `current` (points in its own laser frame) to a prepared `reference`, starting
@@ -145,7 +145,7 @@ impl Convergence {
     }
 }
 
-/// The four matchers by name.
+/// The matchers by name.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum MatcherKind {
     /// Point-to-point least-squares ICP.
@@ -160,15 +160,19 @@ pub enum MatcherKind {
     /// Metric-based ICP (Minguez et al.; 002 §2.2).
     #[serde(rename = "mbicp")]
     Mbicp,
+    /// Point-to-line ICP with the defaults of Censi's CSM: the reference (Censi 2008).
+    #[serde(rename = "pl-icp")]
+    PointToLine,
 }
 
 impl MatcherKind {
     /// Every matcher, in the order of the issue.
-    pub const ALL: [MatcherKind; 4] = [
+    pub const ALL: [MatcherKind; 5] = [
         MatcherKind::LeastSquares,
         MatcherKind::Lorentz,
         MatcherKind::LorentzLines,
         MatcherKind::Mbicp,
+        MatcherKind::PointToLine,
     ];
 
     /// The short name.
@@ -178,6 +182,7 @@ impl MatcherKind {
             MatcherKind::Lorentz => "lorentz",
             MatcherKind::LorentzLines => "lorentz-lines",
             MatcherKind::Mbicp => "mbicp",
+            MatcherKind::PointToLine => "pl-icp",
         }
     }
 
@@ -188,6 +193,7 @@ impl MatcherKind {
             MatcherKind::Lorentz => Box::new(super::Lorentz::default()),
             MatcherKind::LorentzLines => Box::new(super::Lorentz::with_lines()),
             MatcherKind::Mbicp => Box::new(super::Mbicp::default()),
+            MatcherKind::PointToLine => Box::new(super::PointToLine::default()),
         }
     }
 }
@@ -198,9 +204,9 @@ impl fmt::Display for MatcherKind {
     }
 }
 
-/// A matcher name that is not one of the four.
+/// A matcher name that is not one of the five.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("unknown matcher `{0}`: expected one of ls, lorentz, lorentz-lines, mbicp")]
+#[error("unknown matcher `{0}`: expected one of ls, lorentz, lorentz-lines, mbicp, pl-icp")]
 pub struct UnknownMatcher(pub String);
 
 impl FromStr for MatcherKind {

@@ -2,7 +2,7 @@
 //!
 //! The problem (thesis §3.3): given a reference scan `l_j`, a current scan `l_{j+1}` and a guess
 //! from odometry, find the rigid transform `Φ = (θ, tx, ty)` of the current scan's frame in the
-//! reference's frame. Four matchers implement [`ScanMatcher`]:
+//! reference's frame. Five matchers implement [`ScanMatcher`]:
 //!
 //! | name | what | source |
 //! |---|---|---|
@@ -10,6 +10,7 @@
 //! | `lorentz` | [`Lorentz`]: Lorentzian error, Newton–Levenberg–Marquardt, σ 2 → 5 → 0.5 cm | thesis §3.4, App. F |
 //! | `lorentz-lines` | the same with line-assisted association | thesis §3.4.3, App. E.3 |
 //! | `mbicp` | [`Mbicp`]: metric-based ICP | 002 §2.2 |
+//! | `pl-icp` | [`PointToLine`]: point-to-line ICP with CSM's defaults, the reference | Censi 2008 |
 //!
 //! Correspondences come from a [`KdTree`] over the reference's points. [`MapBuilder`] chains
 //! matches into a trajectory and a point map (§3.5), with odometry queued and interpolated to
@@ -24,6 +25,7 @@ mod lorentz;
 mod map;
 mod matcher;
 mod mbicp;
+mod plicp;
 mod quality;
 mod scan;
 
@@ -38,5 +40,6 @@ pub use matcher::{
     UnknownMatcher, plausible,
 };
 pub use mbicp::Mbicp;
+pub use plicp::PointToLine;
 pub use quality::{MatchQuality, TrustRule, polish};
 pub use scan::{RangeScan, ScanPoints};

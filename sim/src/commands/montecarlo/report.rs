@@ -280,7 +280,7 @@ pub fn write_reports(
 }
 
 /// Colours of the matchers, in `MatcherKind::ALL` order.
-const COLOURS: [&str; 4] = ["#d62728", "#1f77b4", "#2ca02c", "#9467bd"];
+const COLOURS: [&str; 5] = ["#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#8c564b"];
 
 fn colour_of(kind: MatcherKind, k: usize) -> &'static str {
     COLOURS[MatcherKind::ALL
