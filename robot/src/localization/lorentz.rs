@@ -129,12 +129,23 @@ impl Lorentz {
     fn energy(src: &[[f64; 2]], dst: &[[f64; 2]], phi: [f64; 3], two_s2: f64) -> f64 {
         let (s, c) = phi[0].sin_cos();
         let inv = 1.0 / two_s2;
-        src.iter()
-            .zip(dst)
+        let factor = |(p, q): (&[f64; 2], &[f64; 2])| {
+            let ex = c * p[0] - s * p[1] + phi[1] - q[0];
+            let ey = s * p[0] + c * p[1] + phi[2] - q[1];
+            (1.0 + ex * ex * inv) * (1.0 + ey * ey * inv)
+        };
+        // The logarithm of a product of eight factors instead of eight logarithms: the same sum
+        // but for rounding, at an eighth of the cost. A product that overflows (residuals of
+        // kilometres at a σ of millimetres) is summed term by term.
+        src.chunks(8)
+            .zip(dst.chunks(8))
             .map(|(p, q)| {
-                let ex = c * p[0] - s * p[1] + phi[1] - q[0];
-                let ey = s * p[0] + c * p[1] + phi[2] - q[1];
-                ((1.0 + ex * ex * inv) * (1.0 + ey * ey * inv)).ln()
+                let product: f64 = p.iter().zip(q).map(factor).product();
+                if product.is_finite() {
+                    product.ln()
+                } else {
+                    p.iter().zip(q).map(|pq| factor(pq).ln()).sum()
+                }
             })
             .sum()
     }
@@ -369,6 +380,49 @@ impl Lorentz {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The energy, a logarithm per eight points, is the sum of every point's logarithm to
+    /// rounding — also with residuals so large against σ that eight factors overflow.
+    #[test]
+    fn the_energy_is_the_sum_of_the_logarithms() {
+        let src: Vec<[f64; 2]> = (0..53)
+            .map(|i| [1.0 + 0.1 * i as f64, (i as f64 * 0.7).sin()])
+            .collect();
+        let mut dst: Vec<[f64; 2]> = src
+            .iter()
+            .enumerate()
+            .map(|(i, p)| [p[0] + 0.03 * (i as f64).cos(), p[1] - 0.02])
+            .collect();
+        let phi: [f64; 3] = [0.05, 0.02, -0.01];
+        let each = |dst: &[[f64; 2]], two_s2: f64| {
+            let (s, c) = phi[0].sin_cos();
+            src.iter()
+                .zip(dst)
+                .map(|(p, q)| {
+                    let ex = c * p[0] - s * p[1] + phi[1] - q[0];
+                    let ey = s * p[0] + c * p[1] + phi[2] - q[1];
+                    ((1.0 + ex * ex / two_s2) * (1.0 + ey * ey / two_s2)).ln()
+                })
+                .sum::<f64>()
+        };
+        let two_s2 = 2.0 * 0.005f64.powi(2);
+        let (chunked, summed) = (Lorentz::energy(&src, &dst, phi, two_s2), each(&dst, two_s2));
+        assert!(
+            (chunked - summed).abs() <= 1e-12 * summed.abs(),
+            "{chunked} {summed}"
+        );
+        // Points 100 km off at σ 1 µm: each factor near 10³⁰⁶, a product of two overflows.
+        for q in dst.iter_mut().step_by(3) {
+            *q = [1e5, -1e5];
+        }
+        let two_s2 = 2.0 * 1e-6f64.powi(2);
+        let (chunked, summed) = (Lorentz::energy(&src, &dst, phi, two_s2), each(&dst, two_s2));
+        assert!(chunked.is_finite() && summed.is_finite());
+        assert!(
+            (chunked - summed).abs() <= 1e-12 * summed.abs(),
+            "{chunked} {summed}"
+        );
+    }
 
     /// The analytic gradient and Hessian agree with finite differences of the energy.
     #[test]
