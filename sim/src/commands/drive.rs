@@ -359,7 +359,7 @@ pub struct DriveArgs {
     /// The laser.
     #[arg(long)]
     pub laser: robot::serial::Endpoint,
-    /// The matcher: ls, lorentz, lorentz-lines or mbicp [default: the scenario's, if any].
+    /// The matcher: ls, lorentz, lorentz-lines, mbicp or pl-icp [default: the scenario's, if any].
     #[arg(long)]
     pub matcher: Option<MatcherKind>,
     /// Output folder [default: out/drive-SCENARIO-NAME].

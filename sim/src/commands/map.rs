@@ -295,7 +295,7 @@ pub struct MapArgs {
     /// The log: a CARMEN `.clf`, a `.script`, a RobotLogger `.log` (each possibly `.gz`) or an
     /// MCAP bag of ROS 2 messages (`.mcap`).
     pub log: PathBuf,
-    /// The matcher: ls, lorentz, lorentz-lines or mbicp.
+    /// The matcher: ls, lorentz, lorentz-lines, mbicp or pl-icp.
     #[arg(long, default_value = "lorentz")]
     pub matcher: MatcherKind,
     /// Output folder [default: out/map-LOGNAME].
@@ -383,7 +383,7 @@ pub fn map_main(args: MapArgs) -> Result<(), super::CommandError> {
 /// for a malformed line.
 #[derive(Clone, Debug, clap::Args)]
 pub struct MatchArgs {
-    /// The matcher: ls, lorentz, lorentz-lines or mbicp.
+    /// The matcher: ls, lorentz, lorentz-lines, mbicp or pl-icp.
     #[arg(long, default_value = "lorentz")]
     pub matcher: MatcherKind,
 }

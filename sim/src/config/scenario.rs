@@ -43,7 +43,7 @@
 //! method = "histogram"                  # or "direct": the baseline with no way round
 //!
 //! [localisation]                        # optional: chain the scans into a map while running
-//! matcher = "lorentz"                   # ls, lorentz, lorentz-lines or mbicp
+//! matcher = "lorentz"                   # ls, lorentz, lorentz-lines, mbicp or pl-icp
 //! keyframe_distance_m = 0.0             # match each scan to the last one moved this far from
 //! keyframe_angle_deg = 0.0              # (0: to the previous scan, as the thesis does)
 //! use_untrusted = false                 # true: use every match, even one not flagged converged
