@@ -1,8 +1,8 @@
 //! Monte Carlo throughput: trials of the default Table 5.1 study (`studies/table-5-1.toml`) per
 //! second on one core. A trial builds a twin at a random free pose, drives one motion through the
-//! firmware, casts two scans with outliers and runs every matcher the study names (five). The target of issue 6 is
-//! the full study — 10,000 trials at each of the two rates — in under 2 minutes on this 2-core
-//! machine, i.e. at least 167 trials/s with both cores (84 per core):
+//! firmware, casts two scans with outliers and runs every matcher the study names (five). The
+//! target of issue 6 is the full study — 10,000 trials at each of the two rates — in under 2
+//! minutes on this 2-core machine, i.e. at least 167 trials/s with both cores (84 per core):
 //! `cargo bench --bench montecarlo`, and for the whole study
 //! `time cargo run --release -- montecarlo studies/table-5-1.toml --threads 2`.
 

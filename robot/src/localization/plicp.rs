@@ -14,6 +14,7 @@
 //! θ, and the answer with the least total distance is kept, as CSM's `restart` does.
 
 use super::matcher::{Convergence, MatchResult, Reference, ScanMatcher, solve3, transform_all};
+use super::quality::accumulate;
 use super::scan::ScanPoints;
 use crate::geometry::{Pose2, wrap_angle};
 
@@ -67,6 +68,15 @@ struct Pair {
     n: [f64; 2],
 }
 
+/// A pair before the trims: its distance to the reference's segment, its nearest reference
+/// point and the squared distance to it.
+struct Candidate {
+    pair: Pair,
+    segment: f64,
+    nearest: usize,
+    d2: f64,
+}
+
 /// What one run of the loop found.
 struct Loop {
     pose: Pose2,
@@ -90,7 +100,7 @@ impl ScanMatcher for PointToLine {
     ) -> MatchResult {
         let first = self.run(reference, current, guess);
         let (mut best, mut iterations) = (first.pose, first.iterations);
-        let (mut best_error, first_kept) = (first.error, first.kept);
+        let (mut best_error, mut settled, first_kept) = (first.error, first.settled, first.kept);
         let mean = first.error / first.kept.max(1) as f64;
         if self.restart_above_m.is_some_and(|limit| mean > limit) {
             for d in [
@@ -109,14 +119,14 @@ impl ScanMatcher for PointToLine {
                 let again = self.run(reference, current, start);
                 iterations += again.iterations;
                 if again.kept > 0 && again.error < best_error {
-                    (best, best_error) = (again.pose, again.error);
+                    (best, best_error, settled) = (again.pose, again.error, again.settled);
                 }
             }
         }
         MatchResult {
             pose: Pose2::new(best.x, best.y, wrap_angle(best.theta)),
             iterations,
-            settled: first.settled,
+            settled,
             correspondences: first_kept,
             ..MatchResult::unmatched(guess)
         }
@@ -129,7 +139,7 @@ impl PointToLine {
         let mut pose = start;
         let mut moved = Vec::with_capacity(current.len());
         let mut last = vec![None; current.len()];
-        let mut candidates: Vec<(Pair, f64, usize, f64)> = Vec::with_capacity(current.len());
+        let mut candidates: Vec<Candidate> = Vec::with_capacity(current.len());
         let mut distances = Vec::with_capacity(current.len());
         let mut nearest_to = vec![f64::INFINITY; reference.points.len()];
         let mut pairs = Vec::with_capacity(current.len());
@@ -177,21 +187,26 @@ impl PointToLine {
                     q: a,
                     n,
                 };
-                candidates.push((pair, segment_distance(*m, a, b), j1, d2));
+                candidates.push(Candidate {
+                    pair,
+                    segment: segment_distance(*m, a, b),
+                    nearest: j1,
+                    d2,
+                });
             }
             // Several points on one reference point: only those near the nearest stay.
             for c in &candidates {
-                nearest_to[c.2] = nearest_to[c.2].min(c.3);
+                nearest_to[c.nearest] = nearest_to[c.nearest].min(c.d2);
             }
-            candidates.retain(|c| c.3 <= 9.0 * nearest_to[c.2]);
+            candidates.retain(|c| c.d2 <= 9.0 * nearest_to[c.nearest]);
             // The nearest of each reference point stays, so this resets every one set above.
             for c in &candidates {
-                nearest_to[c.2] = f64::INFINITY;
+                nearest_to[c.nearest] = f64::INFINITY;
             }
             // Then the trims: a share at most, and no farther than twice the adaptive order
             // statistic.
             distances.clear();
-            distances.extend(candidates.iter().map(|c| c.1));
+            distances.extend(candidates.iter().map(|c| c.segment));
             let k = distances.len();
             if k < 3 {
                 break;
@@ -201,9 +216,9 @@ impl PointToLine {
             let limit = at(self.max_share).min(self.adaptive_mult * at(self.adaptive_order));
             pairs.clear();
             found.error = 0.0;
-            for c in candidates.iter().filter(|c| c.1 <= limit) {
-                pairs.push(c.0);
-                found.error += c.1;
+            for c in candidates.iter().filter(|c| c.segment <= limit) {
+                pairs.push(c.pair);
+                found.error += c.segment;
             }
             found.kept = pairs.len();
             let Some(next) = minimise(&pairs, pose) else {
@@ -232,15 +247,13 @@ fn minimise(pairs: &[Pair], from: Pose2) -> Option<Pose2> {
             let r = [c * pair.p[0] - s * pair.p[1], s * pair.p[0] + c * pair.p[1]];
             let n = pair.n;
             let e = n[0] * (pose.x + r[0] - pair.q[0]) + n[1] * (pose.y + r[1] - pair.q[1]);
-            let jac = [n[0], n[1], -n[0] * r[1] + n[1] * r[0]];
-            for (row, &ja) in h.iter_mut().zip(&jac) {
-                for (v, &jb) in row.iter_mut().zip(&jac) {
-                    *v += ja * jb;
-                }
-            }
-            for (v, &ja) in g.iter_mut().zip(&jac) {
-                *v += ja * e;
-            }
+            accumulate(
+                &mut h,
+                &mut g,
+                [n[0], n[1], -n[0] * r[1] + n[1] * r[0]],
+                e,
+                1.0,
+            );
         }
         let d = solve3(h, g.map(|v| -v))?;
         pose = Pose2::new(pose.x + d[0], pose.y + d[1], pose.theta + d[2]);

@@ -250,7 +250,7 @@ fn constraints<'a>(
 }
 
 /// Adds a residual `e` with derivatives `jac`, weighted `w`, to the normal equations `h`, `g`.
-fn accumulate(h: &mut [[f64; 3]; 3], g: &mut [f64; 3], jac: [f64; 3], e: f64, w: f64) {
+pub(super) fn accumulate(h: &mut [[f64; 3]; 3], g: &mut [f64; 3], jac: [f64; 3], e: f64, w: f64) {
     for (i, row) in h.iter_mut().enumerate() {
         g[i] += w * jac[i] * e;
         for (v, &b) in row.iter_mut().zip(&jac) {
