@@ -333,3 +333,104 @@ fn walked_rays_through_corners_and_along_walls_match_the_tree() {
     }
     assert!(cast > 10_000, "{cast} rays");
 }
+
+/// A leg a mirror reflects or a pane lets through is cast among the faces listed for the cone
+/// from the laser (or its image behind the mirror) through the face it leaves
+/// (`WorldMap::faces_beyond`): it meets what the plain cast meets, to the last bit — also legs
+/// leaving the face at its very ends, legs aimed at other faces' ends, rising and falling legs,
+/// legs nudged off the face along its normal or along their way.
+#[test]
+fn legs_cast_among_a_cones_faces_meet_what_the_plain_cast_meets() {
+    let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(17);
+    let (mut compared, mut through_ends) = (0, 0);
+    let mut listed = Vec::new();
+    for (name, world) in worlds() {
+        let map = WorldMap::new(&world);
+        let faces = map.faces();
+        for _ in 0..300 {
+            let frame = random_frame(&world, &mut rng);
+            let apex = [frame.origin[0], frame.origin[1]];
+            let m = rng.random_range(0..faces.len());
+            let (a, b) = (faces[m].a, faces[m].b);
+            // The laser itself (legs through a pane) or its image behind the face (reflected).
+            let apex = if rng.random_bool(0.5) {
+                apex
+            } else {
+                let n = map.face_normal(m);
+                let off = (apex[0] - a[0]) * n[0] + (apex[1] - a[1]) * n[1];
+                [apex[0] - 2.0 * off * n[0], apex[1] - 2.0 * off * n[1]]
+            };
+            if !map.faces_beyond(apex, m, &mut listed) {
+                continue;
+            }
+            // Where legs leave the face: its ends, just inside them, anywhere, and where the
+            // rays from the apex to other faces' ends cross it.
+            let mut leaves: Vec<[f64; 2]> = [0.0, 1e-12, 0.5, 1.0 - 1e-12, 1.0]
+                .into_iter()
+                .chain((0..3).map(|_| rng.random_range(0.0..1.0)))
+                .map(|s| [a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])])
+                .collect();
+            for other in faces {
+                for end in [other.a, other.b] {
+                    let e = [end[0] - apex[0], end[1] - apex[1]];
+                    let ab = [b[0] - a[0], b[1] - a[1]];
+                    let den = e[0] * ab[1] - e[1] * ab[0];
+                    let w = [a[0] - apex[0], a[1] - apex[1]];
+                    if den.abs() < 1e-12 {
+                        continue;
+                    }
+                    let (s, u) = (
+                        (w[0] * ab[1] - w[1] * ab[0]) / den,
+                        (w[0] * e[1] - w[1] * e[0]) / den,
+                    );
+                    if s > 0.0 && (0.0..=1.0).contains(&u) {
+                        leaves.push([apex[0] + s * e[0], apex[1] + s * e[1]]);
+                        through_ends += 1;
+                    }
+                }
+            }
+            for h in leaves {
+                let plan = [h[0] - apex[0], h[1] - apex[1]];
+                let len = plan[0].hypot(plan[1]);
+                if len < 1e-9 {
+                    continue;
+                }
+                let rise: f64 = if rng.random_bool(0.5) {
+                    0.0
+                } else {
+                    rng.random_range(-0.5..0.5)
+                };
+                let flat = (1.0 - rise * rise).sqrt() / len;
+                let dir = [plan[0] * flat, plan[1] * flat, rise];
+                // Nudged 10 µm off the face: along the normal on the leg's side, or along it.
+                let n = map.face_normal(m);
+                let side = if n[0] * dir[0] + n[1] * dir[1] >= 0.0 {
+                    1.0
+                } else {
+                    -1.0
+                };
+                let nudge = if rng.random_bool(0.5) {
+                    [side * n[0], side * n[1], 0.0]
+                } else {
+                    dir
+                };
+                let z = rng.random_range(0.05..1.5);
+                let origin = [h[0] + 1e-5 * nudge[0], h[1] + 1e-5 * nudge[1], z];
+                let max = rng.random_range(0.5..32.0);
+                let among = map.cast_among(origin, dir, max, apex, &listed);
+                let plain = map.cast_down_tree(origin, dir, max);
+                assert!(
+                    identical(&among, &plain),
+                    "{name}: a leg off face {m} from {origin:?} along {dir:?} within {max} m, \
+                     apex {apex:?}: {among:?} among the cone's faces, {plain:?} down the tree"
+                );
+                compared += 1;
+            }
+        }
+    }
+    assert!(compared > 10_000, "{compared} legs compared");
+    assert!(
+        through_ends > 1000,
+        "{through_ends} legs through other faces' ends"
+    );
+}

@@ -93,6 +93,9 @@ fn turns(dirs: &[[f64; 3]]) -> Option<(f64, Vec<f64>)> {
 pub struct PlaneFan {
     /// Sine and cosine of each ray's angle.
     trig: Vec<(f64, f64)>,
+    /// The same by column, for the directions' columns.
+    sines: Vec<f64>,
+    cosines: Vec<f64>,
     /// Pseudo-angle of each ray counter-clockwise from the first in the plane, indexed, or
     /// `None` when the angles do not increase within a turn.
     turns: Option<Turns>,
@@ -113,7 +116,12 @@ impl PlaneFan {
                 rel.windows(2).all(|w| w[0] <= w[1]) && rel.last() < Some(&(4.0 - 4.0 * PAD));
             ordered.then(|| Turns::indexed(rel))
         });
-        PlaneFan { trig, turns }
+        PlaneFan {
+            sines: trig.iter().map(|t| t.0).collect(),
+            cosines: trig.iter().map(|t| t.1).collect(),
+            trig,
+            turns,
+        }
     }
 
     /// Number of rays.
@@ -215,10 +223,7 @@ impl WorldMap {
     ) {
         out.origin = origin;
         out.max = max;
-        out.dirs.clear();
-        out.dirs
-            .extend((0..fan.len()).map(|k| fan.direction(k, forward, left)));
-        out.rays.fill(&out.dirs);
+        out.rays.fill_plane(fan, forward, left);
         // A plan vector v lies under ray k when (v·F, |F|² v·L) points at angle a_k, F being the
         // forward axis's horizontal part: true when L is horizontal and square to F.
         let f = [forward[0], forward[1]];
@@ -230,8 +235,8 @@ impl WorldMap {
             self.faces().len() <= FAN_MAX_FACES,
         ) else {
             out.nearest.reset(0);
-            for &d in &out.dirs {
-                let (t, i) = self.cast_faces(origin, d, max);
+            for k in 0..out.len() {
+                let (t, i) = self.cast_faces(origin, out.dir(k), max);
                 out.nearest.t.push(t);
                 out.nearest.face.push(i);
             }
@@ -408,31 +413,30 @@ impl Nearest {
 pub struct FanCast {
     origin: [f64; 3],
     max: f64,
-    dirs: Vec<[f64; 3]>,
     /// Each ray's nearest face and its distance.
     nearest: Nearest,
-    /// The directions again by component, for the sweep.
+    /// The rays' directions by component.
     rays: Rays,
 }
 
 impl FanCast {
     /// Number of rays.
     pub fn len(&self) -> usize {
-        self.dirs.len()
+        self.rays.x.len()
     }
 
     /// Whether the fan has no ray.
     pub fn is_empty(&self) -> bool {
-        self.dirs.is_empty()
+        self.rays.x.is_empty()
     }
 
-    /// The rays' directions.
-    pub fn dirs(&self) -> &[[f64; 3]] {
-        &self.dirs
+    /// The rays' directions, first ray first.
+    pub fn dirs(&self) -> Vec<[f64; 3]> {
+        (0..self.len()).map(|k| self.dir(k)).collect()
     }
 
-    /// Ray `k`'s direction: `dirs()[k]`, read from the columns the sweep keeps (a copy of a
-    /// three-element row through memory can cost more than the arithmetic on it).
+    /// Ray `k`'s direction, read from the columns the sweep keeps (a copy of a three-element
+    /// row through memory can cost more than the arithmetic on it).
     #[inline]
     pub fn dir(&self, k: usize) -> [f64; 3] {
         [self.rays.x[k], self.rays.y[k], self.rays.z[k]]
@@ -443,6 +447,36 @@ impl FanCast {
     pub fn hit(&self, map: &WorldMap, k: usize) -> Option<Hit> {
         map.fan_hit(self.origin, self.dir(k), self.max, self.nearest.get(k))
     }
+
+    /// The rays by column, for a tight loop over them: their directions' components and the
+    /// nearest face each meets, its distance and number (`u32::MAX`: none). For a level ray
+    /// (no vertical component) that face is what [`FanCast::hit`] answers; a rising or falling
+    /// ray may meet the floor, the ceiling or a cap nearer.
+    pub fn columns(&self) -> FanColumns<'_> {
+        let n = self.len();
+        FanColumns {
+            x: &self.rays.x[..n],
+            y: &self.rays.y[..n],
+            z: &self.rays.z[..n],
+            t: &self.nearest.t[..n],
+            face: &self.nearest.face[..n],
+        }
+    }
+}
+
+/// A fan's rays by column ([`FanCast::columns`]), all of the fan's length.
+#[derive(Copy, Clone, Debug)]
+pub struct FanColumns<'a> {
+    /// The directions' first component.
+    pub x: &'a [f64],
+    /// Their second.
+    pub y: &'a [f64],
+    /// Their third, vertical.
+    pub z: &'a [f64],
+    /// The distance to the nearest face, metres (infinity: none).
+    pub t: &'a [f64],
+    /// The nearest face's number, `u32::MAX` for none.
+    pub face: &'a [u32],
 }
 
 /// The rays' directions by component, for a tight loop over many rays.
@@ -462,14 +496,21 @@ impl Rays {
         }
     }
 
-    /// The same for `dirs`, in these buffers.
-    fn fill(&mut self, dirs: &[[f64; 3]]) {
+    /// The directions of `fan`'s rays for the plane's axes `forward` and `left`, in these
+    /// buffers: [`PlaneFan::direction`]'s arithmetic, a column at a time.
+    fn fill_plane(&mut self, fan: &PlaneFan, forward: [f64; 3], left: [f64; 3]) {
         for (k, column) in [&mut self.x, &mut self.y, &mut self.z]
             .into_iter()
             .enumerate()
         {
+            let (f, l) = (forward[k], left[k]);
             column.clear();
-            column.extend(dirs.iter().map(|d| d[k]));
+            column.extend(
+                fan.cosines
+                    .iter()
+                    .zip(&fan.sines)
+                    .map(|(&ca, &sa)| ca * f + sa * l),
+            );
         }
     }
 

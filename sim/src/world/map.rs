@@ -272,6 +272,13 @@ impl WorldMap {
         &self.faces
     }
 
+    /// Face `i`'s unit normal in the plan, on one side or the other: [`Hit::normal`] is this
+    /// or its opposite, whichever faces the ray.
+    #[inline]
+    pub fn face_normal(&self, i: usize) -> [f64; 2] {
+        self.normals[i]
+    }
+
     /// Height of the ceiling, metres.
     pub fn ceiling(&self) -> f64 {
         self.ceiling

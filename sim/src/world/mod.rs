@@ -3,6 +3,7 @@
 //! checks and the pictures, and the scores of a 3D model against the true surfaces ([`score`]).
 
 pub mod clutter;
+mod cone;
 mod fan;
 mod index;
 mod map;
@@ -10,7 +11,8 @@ pub mod raster;
 pub mod score;
 mod walk;
 
-pub use fan::{FAN_MAX_FACES, FanCast, PlaneFan};
+pub use cone::Beyond;
+pub use fan::{FAN_MAX_FACES, FanCast, FanColumns, PlaneFan};
 pub use index::SurfaceId;
 pub use map::{Cap, Face, Hit, PointKind, PointKinds, Surface, WorldMap, point_segment_distance};
 

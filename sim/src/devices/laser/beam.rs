@@ -20,7 +20,7 @@
 
 use crate::config::{Material, Optics};
 use crate::rng::SimRng;
-use crate::world::{Hit, Surface, WorldMap};
+use crate::world::{Beyond, Hit, Surface, WorldMap};
 use parry2d::math::{Pose, Vector};
 use parry2d::query::{Ray, RayCast};
 use parry2d::shape::Ball;
@@ -98,6 +98,40 @@ struct Contact {
     distance: f64,
     normal: [f64; 3],
     material: Material,
+    /// The vertical face it met, if it met one.
+    face: Option<usize>,
+}
+
+/// What the second legs of one scan's beams share: the face the last one met, where the next
+/// one's search stops at the latest ([`WorldMap::cast_near`]), and for each face a first leg
+/// ended on, the faces the legs leaving it can meet ([`WorldMap::faces_beyond`]). Start a new
+/// one for each scan: it holds only for beams from one origin.
+#[derive(Clone, Debug, Default)]
+pub struct Legs {
+    hint: Option<usize>,
+    cones: Vec<Cone>,
+    faces: Vec<Beyond>,
+    scratch: Vec<Beyond>,
+}
+
+impl Legs {
+    /// Forgets the last scan's, keeping the buffers.
+    pub fn clear(&mut self) {
+        self.hint = None;
+        self.cones.clear();
+        self.faces.clear();
+    }
+}
+
+/// The faces the legs leaving a face can meet: `faces[from..to]` of [`Legs`], or `None` when
+/// no cone holds them (the laser on the face's line).
+#[derive(Copy, Clone, Debug)]
+struct Cone {
+    /// The face left and whether through it.
+    key: (u32, bool),
+    /// The laser's origin, or its image behind the face, in the plan.
+    apex: [f64; 2],
+    faces: Option<(u32, u32)>,
 }
 
 /// Follows one pulse from `origin` along the unit direction `dir`.
@@ -186,43 +220,84 @@ impl<'a> Pulses<'a> {
         first: Option<&Hit>,
         rng: &mut SimRng,
     ) -> Echo {
-        self.trace_near(origin, dir, first, &mut None, rng)
+        self.trace_near(origin, dir, first, &mut Legs::default(), rng)
     }
 
-    /// [`Pulses::trace_from`] for one of a scan's beams in turn: `hint` is the face the last
-    /// beam's second leg met, and becomes this one's. Neighbouring beams reflected by the same
-    /// mirror mostly meet the same wall, so the tree is searched only nearer than it
-    /// ([`WorldMap::cast_near`]): the same echo, sooner.
+    /// [`Pulses::trace_from`] for one of a scan's beams in turn, all from `origin`: `legs`
+    /// keeps what the scan's second legs share ([`Legs`]), so they are cast sooner, with the
+    /// same echo.
     #[inline(always)]
     pub fn trace_near(
         &self,
         origin: [f64; 3],
         dir: [f64; 3],
         first: Option<&Hit>,
-        hint: &mut Option<usize>,
+        legs: &mut Legs,
         rng: &mut SimRng,
     ) -> Echo {
         // Most beams end on the first surface, matte or black: answered here, as the general
         // path below would answer (the same draw for a black one), without its call.
         if let Some(hit) = first
-            && matches!(hit.material, Material::Matte | Material::Black)
-            && self.others.is_empty()
-            && self.max_range > 0.0
+            && self.plain()
         {
             let n = hit.normal;
             let along = dir[0] * n[0] + dir[1] * n[1] + dir[2] * n[2];
             let cos_in = (-along).clamp(-1.0, 1.0);
-            return if cos_in <= self.prepared.cos_grazing {
-                Echo::Lost
-            } else if hit.material == Material::Matte
-                || rng.random_bool(self.prepared.black_return(cos_in))
-            {
-                Echo::Range(hit.distance)
+            if let Some(echo) = self.ends_on(hit.material, cos_in, hit.distance, rng) {
+                return echo;
+            }
+        }
+        self.follow(origin, dir, first, legs, rng)
+    }
+
+    /// Whether [`Pulses::off_face`] may answer a beam: no other robot to meet, a range to
+    /// meet anything in.
+    #[inline]
+    pub fn plain(&self) -> bool {
+        self.others.is_empty() && self.max_range > 0.0
+    }
+
+    /// The echo of a level beam (`dir[2]` zero) whose first surface is a face with the plan
+    /// normal `normal` (either side), of `material`, `t` metres away, when the pulse ends there
+    /// (matte, black, or lost at grazing incidence): what [`Pulses::trace_near`] answers, the
+    /// same draws in the same order. `None` for glass and metal met nearer the normal than
+    /// grazing, which [`Pulses::trace_near`] must follow. Only for [`Pulses::plain`] pulses.
+    #[inline(always)]
+    pub fn off_face(
+        &self,
+        dir: [f64; 3],
+        t: f64,
+        normal: [f64; 2],
+        material: Material,
+        rng: &mut SimRng,
+    ) -> Option<Echo> {
+        // The hit's normal faces the ray: the cosine of the incidence is |dir · normal|.
+        let cos_in = (dir[0] * normal[0] + dir[1] * normal[1])
+            .abs()
+            .clamp(-1.0, 1.0);
+        self.ends_on(material, cos_in, t, rng)
+    }
+
+    /// A pulse meeting `material` at incidence cosine `cos_in`, `distance` along its path:
+    /// its echo when it ends there, `None` when it goes on (glass, metal).
+    #[inline(always)]
+    fn ends_on(
+        &self,
+        material: Material,
+        cos_in: f64,
+        distance: f64,
+        rng: &mut SimRng,
+    ) -> Option<Echo> {
+        match material {
+            Material::Glass | Material::Metal => None,
+            _ if cos_in <= self.prepared.cos_grazing => Some(Echo::Lost),
+            Material::Matte => Some(Echo::Range(distance)),
+            Material::Black => Some(if rng.random_bool(self.prepared.black_return(cos_in)) {
+                Echo::Range(distance)
             } else {
                 Echo::Lost
-            };
+            }),
         }
-        self.follow(origin, dir, first, hint, rng)
     }
 
     /// What a leg from `origin` along `dir` meets first within `max`.
@@ -235,6 +310,53 @@ impl<'a> Pulses<'a> {
         }
     }
 
+    /// What a second leg from `origin` along `dir` meets first within `max`, having left face
+    /// `left` of the first surface — reflected, or through it (`through`) — of a beam from
+    /// `apex`: among the faces the legs leaving that face can meet ([`Legs`]).
+    fn cast_second(
+        &self,
+        (origin, dir, max): ([f64; 3], [f64; 3], f64),
+        apex: [f64; 3],
+        (left, through): (usize, bool),
+        legs: &mut Legs,
+    ) -> Option<Hit> {
+        if self.down_tree {
+            return self.map.cast_down_tree(origin, dir, max);
+        }
+        let key = (left as u32, through);
+        let found = legs.cones.iter().find(|c| c.key == key).copied();
+        let cone = match found {
+            Some(cone) => cone,
+            None => {
+                // The origin itself through a pane, its image behind a mirror.
+                let mut from = [apex[0], apex[1]];
+                if !through {
+                    let face = &self.map.faces()[left];
+                    let n = self.map.face_normal(left);
+                    let off = (from[0] - face.a[0]) * n[0] + (from[1] - face.a[1]) * n[1];
+                    from = [from[0] - 2.0 * off * n[0], from[1] - 2.0 * off * n[1]];
+                }
+                let start = legs.faces.len();
+                let listed = self.map.faces_beyond(from, left, &mut legs.scratch);
+                legs.faces.extend_from_slice(&legs.scratch);
+                let cone = Cone {
+                    key,
+                    apex: from,
+                    faces: listed.then_some((start as u32, legs.faces.len() as u32)),
+                };
+                legs.cones.push(cone);
+                cone
+            }
+        };
+        match cone.faces {
+            Some((from, to)) => {
+                let faces = &legs.faces[from as usize..to as usize];
+                self.map.cast_among(origin, dir, max, cone.apex, faces)
+            }
+            None => self.map.cast_near(origin, dir, max, legs.hint),
+        }
+    }
+
     /// The pulse's legs, surface by surface, for [`Pulses::trace_near`].
     #[inline(never)]
     fn follow(
@@ -242,13 +364,15 @@ impl<'a> Pulses<'a> {
         origin: [f64; 3],
         dir: [f64; 3],
         first: Option<&Hit>,
-        hint: &mut Option<usize>,
+        legs: &mut Legs,
         rng: &mut SimRng,
     ) -> Echo {
         let prepared = &self.prepared;
         let optics = &prepared.optics;
         let mut travelled = 0.0;
         let (mut o, mut d) = (origin, dir);
+        // The face the first leg ended on, and whether the pulse went through it.
+        let mut left: Option<(usize, bool)> = None;
         for leg in 0..=optics.max_bounces {
             let remaining = self.max_range - travelled;
             if remaining <= 0.0 {
@@ -259,14 +383,19 @@ impl<'a> Pulses<'a> {
                 let wall = first.map(|&hit| Contact::from(hit));
                 nearer_disc(wall, self.others.iter(), o, d, remaining)
             } else {
-                let wall = self.cast(o, d, remaining, *hint);
+                let wall = match left.take() {
+                    Some(face) if leg == 1 => {
+                        self.cast_second((o, d, remaining), origin, face, legs)
+                    }
+                    _ => self.cast(o, d, remaining, legs.hint),
+                };
                 if leg == 1
                     && let Some(Hit {
                         surface: Surface::Face(i),
                         ..
                     }) = wall
                 {
-                    *hint = Some(i);
+                    legs.hint = Some(i);
                 }
                 let wall = wall.map(Contact::from);
                 nearer_disc(wall, self.body.iter().chain(self.others), o, d, remaining)
@@ -298,6 +427,10 @@ impl<'a> Pulses<'a> {
                 Material::Glass if rng.random_bool(optics.glass_transparent) => {
                     // Through the pane: go on from just beyond it.
                     o = [0, 1, 2].map(|k| hit[k] + d[k] * NUDGE);
+                    left = (leg == 0)
+                        .then_some(contact.face)
+                        .flatten()
+                        .map(|i| (i, true));
                 }
                 Material::Metal if cos_in > prepared.cos_metal_return => {
                     return Echo::Range(travelled);
@@ -306,6 +439,10 @@ impl<'a> Pulses<'a> {
                     // Specular reflection, leaving from just in front of the surface.
                     d = [0, 1, 2].map(|k| d[k] - 2.0 * along * n[k]);
                     o = [0, 1, 2].map(|k| hit[k] + n[k] * NUDGE);
+                    left = (leg == 0)
+                        .then_some(contact.face)
+                        .flatten()
+                        .map(|i| (i, false));
                 }
             }
         }
@@ -322,6 +459,10 @@ impl From<Hit> for Contact {
             distance: hit.distance,
             normal: hit.normal,
             material: hit.material,
+            face: match hit.surface {
+                Surface::Face(i) => Some(i),
+                _ => None,
+            },
         }
     }
 }
@@ -374,6 +515,7 @@ fn disc_contact(disc: &Disc, origin: [f64; 3], dir: [f64; 3], limit: f64) -> Opt
         distance: t,
         normal: [f64::from(hit.normal.x), f64::from(hit.normal.y), 0.0],
         material: Material::Matte,
+        face: None,
     })
 }
 
@@ -565,7 +707,7 @@ points = [[1, -50], [1, 50]]
         let pulses = Pulses::new(&m, None, 32.0);
         let (min, max) = world.bounds();
         let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(3);
-        let (mut matte, mut black) = (0, 0);
+        let (mut matte, mut black, mut level_faces) = (0, 0, 0);
         for k in 0..20_000u64 {
             let origin = [
                 rng.random_range(min[0]..max[0]),
@@ -583,11 +725,39 @@ points = [[1, -50], [1, 50]]
             matte += usize::from(first.is_some_and(|h| h.material == Material::Matte));
             black += usize::from(first.is_some_and(|h| h.material == Material::Black));
             let (mut r1, mut r2) = (crate::rng::substream(9, k), crate::rng::substream(9, k));
-            let short = pulses.trace_near(origin, dir, first.as_ref(), &mut None, &mut r1);
-            let long = pulses.follow(origin, dir, first.as_ref(), &mut None, &mut r2);
+            let short =
+                pulses.trace_near(origin, dir, first.as_ref(), &mut Legs::default(), &mut r1);
+            let long = pulses.follow(origin, dir, first.as_ref(), &mut Legs::default(), &mut r2);
             assert_eq!(short, long, "from {origin:?} along {dir:?}");
             assert_eq!(r1.random::<u64>(), r2.random::<u64>(), "the same draws");
+            // A level beam answered from the sweep's columns: the face's plan normal and
+            // material, as a scan reads them.
+            if let Some(Hit {
+                surface: Surface::Face(i),
+                distance,
+                material,
+                ..
+            }) = first
+                && dir[2] == 0.0
+            {
+                let mut r3 = crate::rng::substream(9, k);
+                let off = pulses.off_face(dir, distance, m.face_normal(i), material, &mut r3);
+                let ends = matches!(material, Material::Matte | Material::Black);
+                assert_eq!(off.is_some(), ends, "{material:?}");
+                if let Some(echo) = off {
+                    assert_eq!(echo, long, "from {origin:?} along {dir:?}");
+                    let mut r2 = crate::rng::substream(9, k);
+                    let _ =
+                        pulses.follow(origin, dir, first.as_ref(), &mut Legs::default(), &mut r2);
+                    assert_eq!(r3.random::<u64>(), r2.random::<u64>(), "the same draws");
+                    level_faces += 1;
+                }
+            }
         }
+        assert!(
+            level_faces > 2000,
+            "{level_faces} level beams answered off their face"
+        );
         assert!(matte > 5000, "{matte} beams met matte first");
         assert!(black > 1000, "{black} beams met black first");
     }

@@ -24,8 +24,9 @@ use crate::config::Outliers;
 use crate::config::robot_file::LaserDescription;
 use crate::rng::SimRng;
 use crate::world::{FanCast, PlaneFan, WorldMap};
-use beam::{Disc, Echo};
+use beam::{Disc, Echo, Legs};
 use core::time::Duration;
+use outliers::OutlierCuts;
 use rand_distr::{Distribution, StandardNormal};
 use robot::hardware::LaserScan;
 use robot::{Pose2, Stamp};
@@ -147,7 +148,9 @@ pub struct LaserModel {
     range_max_m: f64,
     range_max_mm: u16,
     sigma_m: f64,
-    outliers: Outliers,
+    outliers: OutlierCuts,
+    /// The largest valid reading, metres: one millimetre short of the maximum.
+    valid_max_m: f64,
     timing: LaserTiming,
     /// Rate of its serial line, bits per second.
     baud: u32,
@@ -165,6 +168,7 @@ impl LaserModel {
         let fov = desc.fov_deg.get().to_radians();
         let angle_min = -fov / 2.0;
         let angle_increment = fov / (beams - 1) as f64;
+        let range_max_mm = (desc.range_max_m.get() * 1000.0).round() as u16;
         let angles: Vec<f64> = (0..beams)
             .map(|i| angle_min + i as f64 * angle_increment)
             .collect();
@@ -174,9 +178,10 @@ impl LaserModel {
             angle_min,
             angle_increment,
             range_max_m: desc.range_max_m.get(),
-            range_max_mm: (desc.range_max_m.get() * 1000.0).round() as u16,
+            range_max_mm,
             sigma_m,
-            outliers,
+            outliers: outliers.cuts(),
+            valid_max_m: f64::from(range_max_mm.saturating_sub(1)) * 1e-3,
             timing: LaserTiming::new(
                 Duration::from_secs_f64(desc.sweep_s.get()),
                 desc.telegram_bytes,
@@ -270,9 +275,10 @@ impl LaserModel {
         }
         // The sweep's buffers are kept from one scan to the next, one set per thread.
         thread_local! {
-            static FAN: core::cell::RefCell<FanCast> = core::cell::RefCell::new(FanCast::default());
+            static FAN: core::cell::RefCell<(FanCast, Legs)> =
+                core::cell::RefCell::new(Default::default());
         }
-        let ranges_mm = FAN.with_borrow_mut(|fan| {
+        let (ranges_mm, local) = FAN.with_borrow_mut(|(fan, legs)| {
             map.cast_plane_fan(
                 frame.origin,
                 frame.axes(),
@@ -280,15 +286,44 @@ impl LaserModel {
                 self.range_max_m,
                 fan,
             );
-            let mut hint: Option<usize> = None;
-            (0..fan.len())
-                .map(|k| {
-                    let (first, dir) = (fan.hit(map, k), fan.dir(k));
-                    let echo = pulses.trace_near(frame.origin, dir, first.as_ref(), &mut hint, rng);
-                    self.reading_mm(echo, rng)
-                })
-                .collect::<Vec<u16>>()
+            legs.clear();
+            let plain = pulses.plain();
+            // The generator's state in a local the loop can keep in registers, put back after.
+            let mut local = rng.clone();
+            let rng = &mut local;
+            let rays = fan.columns();
+            let mut ranges_mm = vec![0u16; fan.len()];
+            for (k, ((((&x, &y), &z), (&t, &face)), reading)) in rays
+                .x
+                .iter()
+                .zip(rays.y)
+                .zip(rays.z)
+                .zip(rays.t.iter().zip(rays.face))
+                .zip(&mut ranges_mm)
+                .enumerate()
+            {
+                let dir = [x, y, z];
+                // A level beam ending on its first face, answered from the sweep's columns;
+                // any other through the general path (the same echo, the same draws).
+                let ends = (plain && z == 0.0 && face != u32::MAX)
+                    .then(|| {
+                        let i = face as usize;
+                        let material = map.faces()[i].material;
+                        pulses.off_face(dir, t, map.face_normal(i), material, rng)
+                    })
+                    .flatten();
+                let echo = match ends {
+                    Some(echo) => echo,
+                    None => {
+                        let first = fan.hit(map, k);
+                        pulses.trace_near(frame.origin, dir, first.as_ref(), legs, rng)
+                    }
+                };
+                *reading = self.reading_mm(echo, rng);
+            }
+            (ranges_mm, local)
         });
+        *rng = local;
         self.telegram(stamp, ranges_mm)
     }
 
@@ -310,7 +345,7 @@ impl LaserModel {
     }
 
     /// What the receiver reports for an echo: noise, then perhaps an outlier, in millimetres.
-    #[inline]
+    #[inline(always)]
     pub fn reading_mm(&self, echo: Echo, rng: &mut SimRng) -> u16 {
         let echo = match self.outliers.draw(echo, self.range_max_m, rng) {
             Some(outlier) => outlier,
@@ -325,9 +360,8 @@ impl LaserModel {
         match echo {
             Echo::Lost => self.range_max_mm,
             Echo::Range(r) => {
-                let valid_max = f64::from(self.range_max_mm.saturating_sub(1)) * 1e-3;
                 // Rounded to the nearest millimetre (half up), without a call into libm.
-                (r.clamp(0.0, valid_max) * 1000.0 + 0.5) as u16
+                (r.clamp(0.0, self.valid_max_m) * 1000.0 + 0.5) as u16
             }
         }
     }
