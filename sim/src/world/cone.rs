@@ -37,7 +37,7 @@ impl WorldMap {
         let face = &self.faces()[m];
         let sub = |p: [f64; 2], q: [f64; 2]| [p[0] - q[0], p[1] - q[1]];
         let cross = |p: [f64; 2], q: [f64; 2]| p[0] * q[1] - p[1] * q[0];
-        let norm = |p: [f64; 2]| p[0].hypot(p[1]);
+        let norm = |p: [f64; 2]| (p[0] * p[0] + p[1] * p[1]).sqrt();
         let (mut a, mut b) = (face.a, face.b);
         let (mut u, mut v) = (sub(a, apex), sub(b, apex));
         let turn = cross(u, v);
@@ -74,11 +74,12 @@ impl WorldMap {
             let cd = sub(d, c);
             let lcd = norm(cd);
             if lcd > 0.0 {
-                let side = |p: [f64; 2]| cross(cd, sub(p, c)) / lcd;
+                // Distances times the face's length, against the margin times it.
+                let (side, margin) = (|p: [f64; 2]| cross(cd, sub(p, c)), MARGIN * lcd);
                 let (sa, sb) = (side(a), side(b));
                 let (du, dv) = (cross(cd, u), cross(cd, v));
-                let left = sa > MARGIN && sb > MARGIN && du >= 0.0 && dv >= 0.0;
-                let right = sa < -MARGIN && sb < -MARGIN && du <= 0.0 && dv <= 0.0;
+                let left = sa > margin && sb > margin && du >= 0.0 && dv >= 0.0;
+                let right = sa < -margin && sb < -margin && du <= 0.0 && dv <= 0.0;
                 if left || right {
                     continue;
                 }
