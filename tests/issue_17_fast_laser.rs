@@ -360,6 +360,7 @@ fn legs_cast_among_a_cones_faces_meet_what_the_plain_cast_meets() {
                 let off = (apex[0] - a[0]) * n[0] + (apex[1] - a[1]) * n[1];
                 [apex[0] - 2.0 * off * n[0], apex[1] - 2.0 * off * n[1]]
             };
+            listed.clear();
             if !map.faces_beyond(apex, m, &mut listed) {
                 continue;
             }

@@ -25,12 +25,10 @@ const MAX_FACES: usize = 400;
 
 impl WorldMap {
     /// The faces passing within [`MARGIN`] of the part of the cone from `apex` through face
-    /// `m` that lies beyond face `m`, into `out` (cleared first), nearest the apex first.
-    /// `false` (and `out` empty) when there is no such cone: the apex on the face's line, or
-    /// the face a point; or when the world has too many faces for a list to pay
-    /// ([`MAX_FACES`]).
+    /// `m` that lies beyond face `m`, added to `out` nearest the apex first. `false` (and
+    /// nothing added) when there is no such cone: the apex on the face's line, or the face a
+    /// point; or when the world has too many faces for a list to pay ([`MAX_FACES`]).
     pub fn faces_beyond(&self, apex: [f64; 2], m: usize, out: &mut Vec<Beyond>) -> bool {
-        out.clear();
         if self.faces().len() > MAX_FACES {
             return false;
         }
@@ -62,6 +60,7 @@ impl WorldMap {
         let beyond = |(n, at): ([f64; 2], [f64; 2]), p: [f64; 2]| {
             n[0] * (p[0] - at[0]) + n[1] * (p[1] - at[1]) > MARGIN
         };
+        let first = out.len();
         for (i, other) in self.faces().iter().enumerate() {
             let (c, d) = (other.a, other.b);
             // Outside one of the cone part's sides, by the margin, at both ends.
@@ -90,13 +89,15 @@ impl WorldMap {
                 ends: [sub(c, apex), sub(d, apex)],
             });
         }
-        out.sort_unstable_by(|x, y| x.gap.total_cmp(&y.gap).then(x.face.cmp(&y.face)));
+        out[first..].sort_unstable_by(|x, y| x.gap.total_cmp(&y.gap).then(x.face.cmp(&y.face)));
         true
     }
 
     /// What a ray from `origin` along the unit direction `dir` meets first within `max`
-    /// metres, when the only faces it can cross are `faces`, listed as
-    /// [`WorldMap::faces_beyond`] lists them from `apex`: exactly [`WorldMap::cast`]'s answer.
+    /// metres, exactly [`WorldMap::cast`]'s answer, when the ray runs within 10 µm of a ray
+    /// from `apex` through face `m` and `faces` are what [`WorldMap::faces_beyond`] listed for
+    /// `apex` and `m`: a leg that left face `m` (reflected, `apex` the laser's image; through
+    /// it, the laser) from just in front of it.
     ///
     /// A face's crossing is at least its gap to the apex less the origin's distance from the
     /// apex away (the triangle inequality), so the faces past the nearest crossing so far are

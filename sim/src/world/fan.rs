@@ -91,9 +91,7 @@ fn turns(dirs: &[[f64; 3]]) -> Option<(f64, Vec<f64>)> {
 /// sweep needs of the angles is computed once, not per scan.
 #[derive(Clone, Debug)]
 pub struct PlaneFan {
-    /// Sine and cosine of each ray's angle.
-    trig: Vec<(f64, f64)>,
-    /// The same by column, for the directions' columns.
+    /// Sine and cosine of each ray's angle, by column.
     sines: Vec<f64>,
     cosines: Vec<f64>,
     /// Pseudo-angle of each ray counter-clockwise from the first in the plane, indexed, or
@@ -119,25 +117,24 @@ impl PlaneFan {
         PlaneFan {
             sines: trig.iter().map(|t| t.0).collect(),
             cosines: trig.iter().map(|t| t.1).collect(),
-            trig,
             turns,
         }
     }
 
     /// Number of rays.
     pub fn len(&self) -> usize {
-        self.trig.len()
+        self.sines.len()
     }
 
     /// Whether the fan has no ray.
     pub fn is_empty(&self) -> bool {
-        self.trig.is_empty()
+        self.sines.is_empty()
     }
 
     /// Ray `k`'s direction for the plane's unit axes `forward` and `left`.
     #[inline]
     pub fn direction(&self, k: usize, forward: [f64; 3], left: [f64; 3]) -> [f64; 3] {
-        let (sa, ca) = self.trig[k];
+        let (sa, ca) = (self.sines[k], self.cosines[k]);
         [0, 1, 2].map(|i| ca * forward[i] + sa * left[i])
     }
 
@@ -242,7 +239,7 @@ impl WorldMap {
             }
             return;
         };
-        let p0 = pseudo_angle([fan.trig[0].1, fan.trig[0].0]);
+        let p0 = pseudo_angle([fan.cosines[0], fan.sines[0]]);
         let in_plane = |v: [f64; 2]| {
             let q = [
                 v[0] * f[0] + v[1] * f[1],

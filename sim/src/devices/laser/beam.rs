@@ -111,7 +111,6 @@ pub struct Legs {
     hint: Option<usize>,
     cones: Vec<Cone>,
     faces: Vec<Beyond>,
-    scratch: Vec<Beyond>,
 }
 
 impl Legs {
@@ -337,8 +336,7 @@ impl<'a> Pulses<'a> {
                     from = [from[0] - 2.0 * off * n[0], from[1] - 2.0 * off * n[1]];
                 }
                 let start = legs.faces.len();
-                let listed = self.map.faces_beyond(from, left, &mut legs.scratch);
-                legs.faces.extend_from_slice(&legs.scratch);
+                let listed = self.map.faces_beyond(from, left, &mut legs.faces);
                 let cone = Cone {
                     key,
                     apex: from,

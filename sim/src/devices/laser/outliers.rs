@@ -13,12 +13,6 @@ use crate::rng::SimRng;
 use rand::RngExt;
 
 impl Outliers {
-    /// Replaces `echo` by an outlier with the configured probabilities; `None` keeps it.
-    #[inline]
-    pub fn draw(&self, echo: Echo, range_max: f64, rng: &mut SimRng) -> Option<Echo> {
-        self.cuts().draw(echo, range_max, rng)
-    }
-
     /// The probabilities summed once, for many readings.
     pub fn cuts(&self) -> OutlierCuts {
         OutlierCuts {
