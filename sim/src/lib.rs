@@ -26,6 +26,7 @@ pub mod output;
 pub mod record;
 pub mod rng;
 pub mod twin;
+pub mod wide;
 pub mod world;
 
 pub use twin::Twin;

@@ -210,6 +210,7 @@ impl WorldMap {
     /// [`WorldMap::cast_fan`] for the rays of `fan` in the plane of the unit axes `forward` and
     /// `left` (`left` horizontal, as a laser's scan plane tilts about it), into `out`: each
     /// ray's direction and what it meets ([`FanCast::hit`]).
+    #[inline(always)]
     pub fn cast_plane_fan(
         &self,
         origin: [f64; 3],
@@ -258,6 +259,7 @@ impl WorldMap {
     /// those from the first to the last that have not met a face nearer than that gap are tried:
     /// behind the first walls most faces are hidden whole. Ties go to the face listed first
     /// whatever the order, so the order changes the work, never the answer.
+    #[inline(always)]
     fn sweep(
         &self,
         origin: [f64; 3],
@@ -305,14 +307,7 @@ impl WorldMap {
             // rounding of either) cannot meet this one first, nor as near.
             let hidden = gap2 * (1.0 - 1e-9) - 1e-18;
             let mut sweep = |range: core::ops::Range<usize>| {
-                // Only the rays from the first to the last still open to this face.
-                let open = |t: &f64| t * t >= hidden;
-                let ts = &nearest.t[range.clone()];
-                if let Some(first) = ts.iter().position(open) {
-                    let last = ts.iter().rposition(open).unwrap_or(first);
-                    let range = range.start + first..range.start + last + 1;
-                    rays.cross(face, i, origin, max, range, nearest);
-                }
+                rays.cross_open(face, i, origin, max, range, hidden, nearest)
             };
             let a = [face.a[0] - origin[0], face.a[1] - origin[1]];
             let b = [face.b[0] - origin[0], face.b[1] - origin[1]];
@@ -370,6 +365,7 @@ const BANDS: usize = 64;
 impl Nearest {
     /// `order` near to far by bands of [`BAND`] metres, in one counting pass: the sweep needs
     /// the near faces first, not an exact order.
+    #[inline]
     fn by_gap(&mut self, order: &mut Vec<InReach>) {
         self.bands.clear();
         self.bands.resize(BANDS + 1, 0);
@@ -390,6 +386,7 @@ impl Nearest {
     }
 
     /// `n` rays that met nothing yet.
+    #[inline]
     fn reset(&mut self, n: usize) {
         self.t.clear();
         self.t.resize(n, f64::INFINITY);
@@ -495,6 +492,7 @@ impl Rays {
 
     /// The directions of `fan`'s rays for the plane's axes `forward` and `left`, in these
     /// buffers: [`PlaneFan::direction`]'s arithmetic, a column at a time.
+    #[inline(always)]
     fn fill_plane(&mut self, fan: &PlaneFan, forward: [f64; 3], left: [f64; 3]) {
         for (k, column) in [&mut self.x, &mut self.y, &mut self.z]
             .into_iter()
@@ -511,11 +509,34 @@ impl Rays {
         }
     }
 
+    /// [`Rays::cross`] for the rays of `range` from the first to the last still open to the
+    /// face: not having met a face nearer than the square root of `hidden`.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn cross_open(
+        &self,
+        face: &Face,
+        i: u32,
+        origin: [f64; 3],
+        max: f64,
+        range: core::ops::Range<usize>,
+        hidden: f64,
+        nearest: &mut Nearest,
+    ) {
+        let open = |t: &f64| t * t >= hidden;
+        let ts = &nearest.t[range.clone()];
+        if let Some(first) = ts.iter().position(open) {
+            let last = ts.iter().rposition(open).unwrap_or(first);
+            let range = range.start + first..range.start + last + 1;
+            self.cross(face, i, origin, max, range, nearest);
+        }
+    }
+
     /// Tries `face` (number `i`) against the rays in `range`, keeping in `nearest` each ray's
     /// nearest crossing, the face listed first of equally near ones: the arithmetic of
     /// [`WorldMap::face_crossing`] step for step, without branches, so it runs at the
     /// processor's pace whichever rays cross.
-    #[inline]
+    #[inline(always)]
     fn cross(
         &self,
         face: &Face,

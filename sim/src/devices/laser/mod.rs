@@ -279,52 +279,87 @@ impl LaserModel {
                 core::cell::RefCell::new(Default::default());
         }
         let (ranges_mm, local) = FAN.with_borrow_mut(|(fan, legs)| {
-            map.cast_plane_fan(
-                frame.origin,
-                frame.axes(),
-                &self.beams,
-                self.range_max_m,
-                fan,
-            );
-            legs.clear();
-            let plain = pulses.plain();
-            // The generator's state in a local the loop can keep in registers, put back after.
-            let mut local = rng.clone();
-            let rng = &mut local;
-            let rays = fan.columns();
-            let mut ranges_mm = vec![0u16; fan.len()];
-            for (k, ((((&x, &y), &z), (&t, &face)), reading)) in rays
-                .x
-                .iter()
-                .zip(rays.y)
-                .zip(rays.z)
-                .zip(rays.t.iter().zip(rays.face))
-                .zip(&mut ranges_mm)
-                .enumerate()
-            {
-                let dir = [x, y, z];
-                // A level beam ending on its first face, answered from the sweep's columns;
-                // any other through the general path (the same echo, the same draws).
-                let ends = (plain && z == 0.0 && face != u32::MAX)
-                    .then(|| {
-                        let i = face as usize;
-                        let material = map.faces()[i].material;
-                        pulses.off_face(dir, t, map.face_normal(i), material, rng)
-                    })
-                    .flatten();
-                let echo = match ends {
-                    Some(echo) => echo,
-                    None => {
-                        let first = fan.hit(map, k);
-                        pulses.trace_near(frame.origin, dir, first.as_ref(), legs, rng)
-                    }
-                };
-                *reading = self.reading_mm(echo, rng);
+            #[cfg(target_arch = "x86_64")]
+            if crate::wide::avx2() {
+                // SAFETY: the processor runs AVX2, checked just above.
+                return unsafe { self.sweep_scan_avx2(map, pulses, frame, fan, legs, rng) };
             }
-            (ranges_mm, local)
+            self.sweep_scan(map, pulses, frame, fan, legs, rng)
         });
         *rng = local;
         self.telegram(stamp, ranges_mm)
+    }
+
+    /// [`LaserModel::sweep_scan`] compiled for AVX2 ([`crate::wide`]): the same bits.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn sweep_scan_avx2(
+        &self,
+        map: &WorldMap,
+        pulses: beam::Pulses<'_>,
+        frame: LaserFrame,
+        fan: &mut FanCast,
+        legs: &mut Legs,
+        rng: &SimRng,
+    ) -> (Vec<u16>, SimRng) {
+        self.sweep_scan(map, pulses, frame, fan, legs, rng)
+    }
+
+    /// The readings of a scan from `frame`, its beams' first legs cast in one sweep, and the
+    /// generator's state after them.
+    #[inline(always)]
+    fn sweep_scan(
+        &self,
+        map: &WorldMap,
+        pulses: beam::Pulses<'_>,
+        frame: LaserFrame,
+        fan: &mut FanCast,
+        legs: &mut Legs,
+        rng: &SimRng,
+    ) -> (Vec<u16>, SimRng) {
+        map.cast_plane_fan(
+            frame.origin,
+            frame.axes(),
+            &self.beams,
+            self.range_max_m,
+            fan,
+        );
+        legs.clear();
+        let plain = pulses.plain();
+        // The generator's state in a local the loop can keep in registers, put back after.
+        let mut local = rng.clone();
+        let rng = &mut local;
+        let rays = fan.columns();
+        let mut ranges_mm = vec![0u16; fan.len()];
+        for (k, ((((&x, &y), &z), (&t, &face)), reading)) in rays
+            .x
+            .iter()
+            .zip(rays.y)
+            .zip(rays.z)
+            .zip(rays.t.iter().zip(rays.face))
+            .zip(&mut ranges_mm)
+            .enumerate()
+        {
+            let dir = [x, y, z];
+            // A level beam ending on its first face, answered from the sweep's columns;
+            // any other through the general path (the same echo, the same draws).
+            let ends = (plain && z == 0.0 && face != u32::MAX)
+                .then(|| {
+                    let i = face as usize;
+                    let material = map.faces()[i].material;
+                    pulses.off_face(dir, t, map.face_normal(i), material, rng)
+                })
+                .flatten();
+            let echo = match ends {
+                Some(echo) => echo,
+                None => {
+                    let first = fan.hit(map, k);
+                    pulses.trace_near(frame.origin, dir, first.as_ref(), legs, rng)
+                }
+            };
+            *reading = self.reading_mm(echo, rng);
+        }
+        (ranges_mm, local)
     }
 
     /// The world direction of every beam from `frame`, first beam first.
@@ -360,8 +395,10 @@ impl LaserModel {
         match echo {
             Echo::Lost => self.range_max_mm,
             Echo::Range(r) => {
-                // Rounded to the nearest millimetre (half up), without a call into libm.
-                (r.clamp(0.0, self.valid_max_m) * 1000.0 + 0.5) as u16
+                // Kept within the valid range (`clamp` but for its check of the bounds: the
+                // same for every `r`, NaN included), rounded to the nearest millimetre (half
+                // up) without a call into libm.
+                (r.max(0.0).min(self.valid_max_m) * 1000.0 + 0.5) as u16
             }
         }
     }
