@@ -149,6 +149,7 @@ fn whole_scans_equal_the_reference_reading_for_reading() {
                 Outliers::preset(outliers).unwrap(),
             );
             let reference = model.clone().with_casting(Casting::PerBeam);
+            let baseline = model.clone().with_casting(Casting::SweepBaseline);
             for k in 0..40u64 {
                 let frame = random_frame(&world, &mut rng);
                 // The robot's own body, which reflected beams can meet.
@@ -160,6 +161,7 @@ fn whole_scans_equal_the_reference_reading_for_reading() {
                 let seed = rng.random::<u64>();
                 let mut a = sim::rng::substream(seed, k);
                 let mut b = sim::rng::substream(seed, k);
+                let mut c = sim::rng::substream(seed, k);
                 // Other robots around, which every leg meets too.
                 let others: Vec<Disc> = (0..rng.random_range(0..4))
                     .map(|_| Disc {
@@ -173,10 +175,17 @@ fn whole_scans_equal_the_reference_reading_for_reading() {
                     .collect();
                 let fast = model.scan_among(&map, body, &others, frame, Stamp(k), &mut a);
                 let reference = reference.scan_among(&map, body, &others, frame, Stamp(k), &mut b);
+                // The sweep as compiled for this processor (AVX2 where it has it) and for the
+                // baseline one.
+                let base = baseline.scan_among(&map, body, &others, frame, Stamp(k), &mut c);
                 assert_eq!(fast, reference, "{name}, {outliers}, {frame:?}");
                 assert_eq!(
-                    a.random::<u64>(),
-                    b.random::<u64>(),
+                    base, reference,
+                    "baseline build: {name}, {outliers}, {frame:?}"
+                );
+                let draws = [a.random::<u64>(), b.random::<u64>(), c.random::<u64>()];
+                assert!(
+                    draws[0] == draws[1] && draws[1] == draws[2],
                     "the same draws were made"
                 );
                 compared += 1;

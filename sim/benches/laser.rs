@@ -11,6 +11,10 @@
 //!   specular loss and multi-bounce paths; the reference is the same ring with every ray cast on
 //!   its own to its end.
 //!
+//! The sweep is also measured as compiled for the baseline x86-64 processor
+//! (`Casting::SweepBaseline`): the default picks an AVX2 build where the processor has one
+//! (`sim/src/wide.rs`), with the same readings.
+//!
 //! Beside them, the sweep's geometry alone (`cast_plane_fan` and each beam's first surface, no
 //! optics, no noise): the ray-casting limit a whole scan is measured against.
 //!
@@ -73,9 +77,9 @@ fn main() {
     let pioneer = RobotDescription::load(root().join("scenarios/robots/pioneer-3dx.toml")).unwrap();
     let lab_text = std::fs::read_to_string(root().join("worlds/lab.toml")).unwrap();
     println!(
-        "| world | scan | first surfaces only, scans/s | sweep, scans/s | reference, scans/s | speed-up |"
+        "| world | scan | first surfaces only, scans/s | sweep, scans/s | sweep, baseline build, scans/s | reference, scans/s | speed-up | speed-up, baseline build |"
     );
-    println!("|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|");
     let cluttered = sim::world::clutter::lab_with_boxes(&lab_text, 72);
     let worlds = [
         (
@@ -161,18 +165,31 @@ fn main() {
                     black_box(reference.scan(&map, None, f, Stamp(k as u64), &mut rng2));
                 },
             );
+            // The same sweep compiled for the baseline x86-64 processor (no AVX2).
+            let baseline = model.clone().with_casting(Casting::SweepBaseline);
+            let mut rng3 = sim::rng::stream(1, "bench");
+            let (baseline, _) = best_of(
+                2000,
+                |k| {
+                    let f = frames[k % frames.len()];
+                    black_box(baseline.scan(&map, None, f, Stamp(k as u64), &mut rng3));
+                },
+                |_| {},
+            );
             let what = if tilt_deg == 0.0 {
                 format!("level, outliers {outliers}")
             } else {
                 format!("tilted {tilt_deg}°, outliers {outliers}")
             };
             println!(
-                "| {name} ({} faces) | {what} | {:.0} | {:.0} | {:.0} | {:.2} |",
+                "| {name} ({} faces) | {what} | {:.0} | {:.0} | {:.0} | {:.0} | {:.2} | {:.2} |",
                 map.faces().len(),
                 1.0 / geometry,
                 1.0 / sweep,
+                1.0 / baseline,
                 1.0 / reference,
-                reference / sweep
+                reference / sweep,
+                reference / baseline,
             );
         }
     }

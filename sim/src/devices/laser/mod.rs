@@ -131,8 +131,12 @@ impl LaserFrame {
 /// How a scan's beams are cast: the same readings either way, to the last bit.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 pub enum Casting {
-    /// The beams' first legs in one sweep of the world's faces (the default).
+    /// The beams' first legs in one sweep of the world's faces (the default), compiled for
+    /// AVX2 where the processor has it ([`crate::wide`]).
     Sweep,
+    /// The same sweep compiled for the baseline processor whatever this one has: to check
+    /// that both builds read the same.
+    SweepBaseline,
     /// Each beam cast on its own down the world's tree: the reference the sweep is tested and
     /// benchmarked against.
     PerBeam,
@@ -280,7 +284,7 @@ impl LaserModel {
         }
         let (ranges_mm, local) = FAN.with_borrow_mut(|(fan, legs)| {
             #[cfg(target_arch = "x86_64")]
-            if crate::wide::avx2() {
+            if self.casting == Casting::Sweep && crate::wide::avx2() {
                 // SAFETY: the processor runs AVX2, checked just above.
                 return unsafe { self.sweep_scan_avx2(map, pulses, frame, fan, legs, rng) };
             }
