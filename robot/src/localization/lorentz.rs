@@ -52,7 +52,7 @@ pub struct Lorentz {
     pub polish_rounds: usize,
     /// Where to start again, relative to the guess, when the answer is not trusted
     /// ([`TrustRule`]): the trusted answer with the most inliers is kept. Not in the thesis;
-    /// empty (the default) leaves it out, and [`Lorentz::with_lines`] has [`RESTARTS`].
+    /// empty (the default) leaves it out, and [`Lorentz::with_lines`] has `RESTARTS`.
     pub restarts: Vec<Pose2>,
 }
 

@@ -46,7 +46,7 @@ pub struct Mbicp {
     /// occlusion) rather than to a point inside a segment. After a retreat half a corridor
     /// scan is such points, and they would drag the estimate back. Default true.
     pub drop_edge_pairs: bool,
-    /// Acceleration, after Besl & McKay's accelerated ICP (002's ref. [2]): when two successive
+    /// Acceleration, after Besl & McKay's accelerated ICP (002's ref. \[2\]): when two successive
     /// corrections point the same way (within 10°) and shrink by `ρ`, also take the geometric
     /// remainder `ρ / (1 − ρ)` of the last one, but no longer than this, metres in
     /// `(x, y, Lθ)`. Along a wall the iteration otherwise creeps (29 iterations a twin pair

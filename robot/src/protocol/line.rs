@@ -8,8 +8,8 @@
 //! stream: robot code never reads the clock itself); end of stream is
 //! [`LinkError::Disconnected`].
 //!
-//! [`BaseLink`] and [`PanTiltLink`] speak the commands of [`base`](super::base) and
-//! [`pan_tilt`](super::pan_tilt) over a `Read + Write` stream: each command is checked (arguments
+//! [`BaseLink`] and [`PanTiltLink`] speak the commands of [`base`] and
+//! [`pan_tilt`] over a `Read + Write` stream: each command is checked (arguments
 //! 0..=65535 and their documented ranges) before a byte is sent, then its reply is read and parsed.
 
 use super::base::{self, ReplyError};

@@ -138,7 +138,7 @@ pub fn drive_chassis(
 /// Advances the rigid bodies by one step.
 ///
 /// A step in which the robot (alone in its world, not one of a fleet) moves far from any wall is
-/// integrated here, as rapier's solver integrates a body with no contact ([`glide`]), without
+/// integrated here, as rapier's solver integrates a body with no contact (`glide`), without
 /// the solver's fixed cost: the same positions to the last bit (every scenario's files are
 /// compared byte for byte with and without it, `tests/issue_17_glide.rs`).
 pub fn step_physics(

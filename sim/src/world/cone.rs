@@ -24,10 +24,10 @@ const MARGIN: f64 = 1e-4;
 const MAX_FACES: usize = 400;
 
 impl WorldMap {
-    /// The faces passing within [`MARGIN`] of the part of the cone from `apex` through face
+    /// The faces passing within `MARGIN` of the part of the cone from `apex` through face
     /// `m` that lies beyond face `m`, added to `out` nearest the apex first. `false` (and
     /// nothing added) when there is no such cone: the apex on the face's line, or the face a
-    /// point; or when the world has too many faces for a list to pay ([`MAX_FACES`]).
+    /// point; or when the world has too many faces for a list to pay (`MAX_FACES`).
     pub fn faces_beyond(&self, apex: [f64; 2], m: usize, out: &mut Vec<Beyond>) -> bool {
         if self.faces().len() > MAX_FACES {
             return false;

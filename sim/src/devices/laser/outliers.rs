@@ -36,7 +36,7 @@ fn below(p: f64) -> u64 {
 
 /// [`Outliers`] as the cumulative probabilities one uniform draw is compared with: below
 /// `uniform` a uniform reading, then a short one, then a dropout. Each is kept as the
-/// whole number the draw's 53 bits are compared with ([`below`]), so a reading that is no
+/// whole number the draw's 53 bits are compared with (`below`), so a reading that is no
 /// outlier costs one comparison of integers.
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct OutlierCuts {
