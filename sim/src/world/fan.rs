@@ -307,7 +307,7 @@ impl WorldMap {
             // rounding of either) cannot meet this one first, nor as near.
             let hidden = gap2 * (1.0 - 1e-9) - 1e-18;
             let mut sweep = |range: core::ops::Range<usize>| {
-                rays.cross_open(face, i, origin, max, range, hidden, nearest)
+                rays.cross(face, i, origin, max, range, hidden, nearest)
             };
             let a = [face.a[0] - origin[0], face.a[1] - origin[1]];
             let b = [face.b[0] - origin[0], face.b[1] - origin[1]];
@@ -509,11 +509,14 @@ impl Rays {
         }
     }
 
-    /// [`Rays::cross`] for the rays of `range` from the first to the last still open to the
-    /// face: not having met a face nearer than the square root of `hidden`.
+    /// Tries `face` (number `i`) against the rays of `range` from the first to the last still
+    /// open to it (not having met a face nearer than the square root of `hidden`), keeping in
+    /// `nearest` each ray's nearest crossing, the face listed first of equally near ones: the
+    /// arithmetic of [`WorldMap::face_crossing`] step for step, without branches, so it runs at
+    /// the processor's pace whichever rays cross.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn cross_open(
+    fn cross(
         &self,
         face: &Face,
         i: u32,
@@ -525,27 +528,11 @@ impl Rays {
     ) {
         let open = |t: &f64| t * t >= hidden;
         let ts = &nearest.t[range.clone()];
-        if let Some(first) = ts.iter().position(open) {
-            let last = ts.iter().rposition(open).unwrap_or(first);
-            let range = range.start + first..range.start + last + 1;
-            self.cross(face, i, origin, max, range, nearest);
-        }
-    }
-
-    /// Tries `face` (number `i`) against the rays in `range`, keeping in `nearest` each ray's
-    /// nearest crossing, the face listed first of equally near ones: the arithmetic of
-    /// [`WorldMap::face_crossing`] step for step, without branches, so it runs at the
-    /// processor's pace whichever rays cross.
-    #[inline(always)]
-    fn cross(
-        &self,
-        face: &Face,
-        i: u32,
-        origin: [f64; 3],
-        max: f64,
-        range: core::ops::Range<usize>,
-        nearest: &mut Nearest,
-    ) {
+        let Some(first) = ts.iter().position(open) else {
+            return;
+        };
+        let last = ts.iter().rposition(open).unwrap_or(first);
+        let range = range.start + first..range.start + last + 1;
         let e = [face.b[0] - face.a[0], face.b[1] - face.a[1]];
         let w = [face.a[0] - origin[0], face.a[1] - origin[1]];
         let nt = w[0] * e[1] - w[1] * e[0];
