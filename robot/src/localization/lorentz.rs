@@ -50,11 +50,31 @@ pub struct Lorentz {
     /// [`Lorentz::with_lines`] has 5: the median error of synthetic pairs falls from 2.0 to
     /// 1.9 mm without outliers and from 2.8 to 2.5 mm with 20 % (`twin matchers`).
     pub polish_rounds: usize,
-    /// Where to start again, relative to the guess, when the answer is not trusted
-    /// ([`TrustRule`]): the trusted answer with the most inliers is kept. Not in the thesis;
+    /// A second σ schedule, metres, tried from the guess when the first answer is not trusted
+    /// ([`TrustRule`]), or is trusted but fits loosely (under `wide_below` of the current
+    /// points inliers) after going more than 10 cm or 3° from the guess: the trusted answer
+    /// with the larger inlier share is kept. Not in the thesis; empty (the default) leaves it
+    /// out, and [`Lorentz::with_lines`] has [`WIDE_SIGMAS`].
+    pub wide_sigmas_m: Vec<f64>,
+    /// The inlier share under which a trusted answer also tries `wide_sigmas_m`. Default 0.7.
+    pub wide_below: f64,
+    /// Where to start again, relative to the guess, when the answer is still not trusted
+    /// ([`TrustRule`]) after `wide_sigmas_m`: the trusted answer with the most inliers is kept. Not in the thesis;
     /// empty (the default) leaves it out, and [`Lorentz::with_lines`] has `RESTARTS`.
     pub restarts: Vec<Pose2>,
 }
+
+/// The second schedule of [`Lorentz::with_lines`]: σ 20 cm first, then 5 and 0.5 cm. At
+/// σ 2 cm a point farther than a few centimetres from its pair barely pulls, so from a guess
+/// 20 cm and 10° off the first pass can settle on whatever few pairs happen to be near (a
+/// corridor's doors one door along); at 20 cm every pair pulls and the scans are brought
+/// together first. It is not the first schedule because with 20 % outliers the wide pass is
+/// pulled aside too and 3 % of synthetic pairs end in another minimum (`twin matchers`).
+pub const WIDE_SIGMAS: [f64; 3] = [0.2, 0.05, 0.005];
+
+/// How far from the guess a loosely fitting answer must have gone for the second schedule to
+/// be tried: 10 cm or 3°. Nearer, the first pass started close enough for its narrow σ.
+const WIDE_AFTER: (f64, f64) = (0.1, 0.052_359_877_559_829_89);
 
 /// The restarts of [`Lorentz::with_lines`]: the guess turned by ±8° and ±16°, and moved 15 cm
 /// forward, back, left and right. From guesses σ 20 cm / 10° off the corrected real logs they
@@ -120,6 +140,7 @@ impl Lorentz {
         Lorentz {
             lines: Some(LineParams::default()),
             polish_rounds: 5,
+            wide_sigmas_m: WIDE_SIGMAS.to_vec(),
             restarts: RESTARTS.to_vec(),
             ..Lorentz::default()
         }
@@ -242,6 +263,8 @@ impl Default for Lorentz {
             lines: None,
             drop_edge_pairs: true,
             polish_rounds: 0,
+            wide_sigmas_m: Vec::new(),
+            wide_below: 0.7,
             restarts: Vec::new(),
         }
     }
@@ -266,15 +289,38 @@ impl ScanMatcher for Lorentz {
             .lines
             .as_ref()
             .map(|params| (lines_of(&reference.points.xy, params), params.end_margin_m));
-        let mut first = self.passes(reference, current, lines.as_ref(), guess);
-        if self.restarts.is_empty() {
+        let mut first = self.passes(&self.sigmas_m, reference, current, lines.as_ref(), guess);
+        if self.restarts.is_empty() && self.wide_sigmas_m.is_empty() {
             return first;
         }
         // Judged here by the rule `align` applies, so the answer carries its quality and
         // `align` does not judge it again.
         let rule = TrustRule::default();
         first.quality = rule.assess(reference, &current.xy, &first.pose);
-        if rule.trusts(&first.quality) {
+        let trusted = rule.trusts(&first.quality);
+        let travelled = guess.relative(&first.pose);
+        let far =
+            travelled.x.hypot(travelled.y) > WIDE_AFTER.0 || travelled.theta.abs() > WIDE_AFTER.1;
+        let loose = first.quality.inlier_share < self.wide_below;
+        if !self.wide_sigmas_m.is_empty() && (!trusted || (loose && far)) {
+            let mut wide = self.passes(
+                &self.wide_sigmas_m,
+                reference,
+                current,
+                lines.as_ref(),
+                guess,
+            );
+            wide.quality = rule.assess(reference, &current.xy, &wide.pose);
+            wide.iterations += first.iterations;
+            let better = rule.trusts(&wide.quality)
+                && (!trusted || wide.quality.inlier_share > first.quality.inlier_share);
+            if better {
+                first = wide;
+            } else {
+                first.iterations = wide.iterations;
+            }
+        }
+        if self.restarts.is_empty() || rule.trusts(&first.quality) {
             return first;
         }
         // Not trusted: start again from guesses around this one, and keep the trusted answer
@@ -283,7 +329,7 @@ impl ScanMatcher for Lorentz {
         let mut iterations = first.iterations;
         for offset in &self.restarts {
             let start = guess.compose(offset);
-            let mut result = self.passes(reference, current, lines.as_ref(), start);
+            let mut result = self.passes(&self.sigmas_m, reference, current, lines.as_ref(), start);
             iterations += result.iterations;
             result.quality = rule.assess(reference, &current.xy, &result.pose);
             let share = result.quality.inlier_share;
@@ -298,9 +344,10 @@ impl ScanMatcher for Lorentz {
 }
 
 impl Lorentz {
-    /// The σ passes and the polish from `guess`.
+    /// The σ passes of `sigmas` and the polish from `guess`.
     fn passes(
         &self,
+        sigmas: &[f64],
         reference: &Reference,
         current: &ScanPoints,
         lines: Option<&(Vec<Option<super::lines::Line>>, f64)>,
@@ -314,7 +361,7 @@ impl Lorentz {
         // moves too little for another to come nearer (the same answers, sooner).
         let mut last = vec![None; current.len()];
         let mut result = MatchResult::unmatched(guess);
-        for &sigma in &self.sigmas_m {
+        for &sigma in sigmas {
             result.settled = false;
             for _ in 0..self.convergence.max_iterations {
                 result.iterations += 1;

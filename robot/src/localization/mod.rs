@@ -8,7 +8,7 @@
 //! |---|---|---|
 //! | `ls` | [`LeastSquares`] point-to-point ICP, the baseline | thesis §5.2 |
 //! | `lorentz` | [`Lorentz`]: Lorentzian error, Newton–Levenberg–Marquardt, σ 2 → 5 → 0.5 cm | thesis §3.4, App. F |
-//! | `lorentz-lines` | the same with line-assisted association | thesis §3.4.3, App. E.3 |
+//! | `lorentz-lines` | the same with line-assisted association; a point-to-line polish, a wide second σ schedule and restarts when an answer is not trusted (not in the thesis) | thesis §3.4.3, App. E.3 |
 //! | `mbicp` | [`Mbicp`]: metric-based ICP | 002 §2.2 |
 //! | `pl-icp` | [`PointToLine`]: point-to-line ICP with CSM's defaults, the reference | Censi 2008 |
 //!
@@ -33,7 +33,7 @@ pub use grid::{Cell, GridBuilder, GridConfig, OccupancyGrid};
 pub use icp::LeastSquares;
 pub use kdtree::{KdTree, LastNearest};
 pub use level::{LEVEL_TOLERANCE_RAD, LevelLocaliser};
-pub use lorentz::{Lorentz, THESIS_SIGMAS};
+pub use lorentz::{Lorentz, THESIS_SIGMAS, WIDE_SIGMAS};
 pub use map::{MapBuilder, MapConfig, MatchStats, Placed};
 pub use matcher::{
     Convergence, MAX_COORDINATE_M, MatchResult, MatcherKind, Reference, ScanMatcher,
