@@ -257,6 +257,18 @@ fn tempfile_dir(name: &str) -> std::path::PathBuf {
     dir
 }
 
+/// How many of `set`'s pairs `matcher` answers within the set's tolerance.
+fn right_answers(set: &CaseSet, matcher: &robot::localization::Lorentz) -> usize {
+    set.cases
+        .iter()
+        .filter(|c| {
+            let r = matcher.match_scans(&c.reference, &c.current, c.guess);
+            let off = c.truth.relative(&r.pose);
+            off.x.hypot(off.y) <= set.tolerance_m && off.theta.abs() <= set.tolerance_rad
+        })
+        .count()
+}
+
 /// From a guess 20 cm and 10° off, a line-assisted Lorentzian that is not trusted starts again
 /// around the guess: it is right more often than the same matcher started once, over two seeds.
 #[test]
@@ -271,19 +283,7 @@ fn restarts_rescue_large_guesses() {
         let sets = sets(45, seed);
         let large = sets.last().expect("the large-guess row");
         assert!(large.name.contains("20 cm"), "{}", large.name);
-        let successes = |m: &Lorentz| {
-            large
-                .cases
-                .iter()
-                .filter(|c| {
-                    let r = m.match_scans(&c.reference, &c.current, c.guess);
-                    let off = c.truth.relative(&r.pose);
-                    off.x.hypot(off.y) <= large.tolerance_m
-                        && off.theta.abs() <= large.tolerance_rad
-                })
-                .count()
-        };
-        let (a, b) = (successes(&once), successes(&again));
+        let (a, b) = (right_answers(large, &once), right_answers(large, &again));
         let n = large.cases.len();
         assert!(
             b >= a,
@@ -309,26 +309,16 @@ fn a_wide_second_schedule_rescues_large_guesses() {
     };
     let both = Lorentz::with_lines();
     assert!(!both.wide_sigmas_m.is_empty());
-    let successes = |set: &CaseSet, m: &Lorentz| {
-        set.cases
-            .iter()
-            .filter(|c| {
-                let r = m.match_scans(&c.reference, &c.current, c.guess);
-                let off = c.truth.relative(&r.pose);
-                off.x.hypot(off.y) <= set.tolerance_m && off.theta.abs() <= set.tolerance_rad
-            })
-            .count()
-    };
     let (mut without, mut with) = (0, 0);
     for seed in [7, 8] {
         let sets = sets(150, seed);
         let large = sets.last().expect("the large-guess row");
         assert!(large.name.contains("20 cm"), "{}", large.name);
-        let (a, b) = (successes(large, &narrow), successes(large, &both));
+        let (a, b) = (right_answers(large, &narrow), right_answers(large, &both));
         assert!(b >= a, "seed {seed}, large guesses: {b} against {a}");
         (without, with) = (without + a, with + b);
         for set in sets.iter().filter(|s| s.name.starts_with("synthetic")) {
-            let (a, b) = (successes(set, &narrow), successes(set, &both));
+            let (a, b) = (right_answers(set, &narrow), right_answers(set, &both));
             assert!(b >= a, "seed {seed}, {}: {b} against {a}", set.name);
         }
     }
