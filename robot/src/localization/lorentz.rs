@@ -59,8 +59,9 @@ pub struct Lorentz {
     /// The inlier share under which a trusted answer also tries `wide_sigmas_m`. Default 0.7.
     pub wide_below: f64,
     /// Where to start again, relative to the guess, when the answer is still not trusted
-    /// ([`TrustRule`]) after `wide_sigmas_m`: the trusted answer with the most inliers is kept. Not in the thesis;
-    /// empty (the default) leaves it out, and [`Lorentz::with_lines`] has `RESTARTS`.
+    /// ([`TrustRule`]) after `wide_sigmas_m`: the trusted answer with the most inliers is
+    /// kept. Not in the thesis; empty (the default) leaves it out, and
+    /// [`Lorentz::with_lines`] has `RESTARTS`.
     pub restarts: Vec<Pose2>,
 }
 
