@@ -1,7 +1,7 @@
 //! The one interface every scan matcher implements, and the pieces they share.
 
 use super::kdtree::KdTree;
-use super::quality::{MatchQuality, TrustRule};
+use super::quality::{MatchQuality, Surface, TrustRule, surfaces};
 use super::scan::{RangeScan, ScanPoints};
 use crate::geometry::Pose2;
 use std::fmt;
@@ -58,13 +58,25 @@ pub struct Reference {
     pub points: ScanPoints,
     /// A k-d tree over `points.xy`.
     pub tree: KdTree,
+    /// The surface at each point, for point-to-line residuals.
+    surfaces: Vec<Option<Surface>>,
 }
 
 impl Reference {
     /// Prepares `points` as a reference.
     pub fn new(points: ScanPoints) -> Self {
         let tree = KdTree::new(&points.xy);
-        Reference { points, tree }
+        let surfaces = surfaces(&points.xy);
+        Reference {
+            points,
+            tree,
+            surfaces,
+        }
+    }
+
+    /// The reference's surface at point `j`, if its neighbours give it a direction.
+    pub(super) fn surface(&self, j: usize) -> Option<&Surface> {
+        self.surfaces.get(j)?.as_ref()
     }
 
     /// Whether point `j` is the first or last point of the scan: the edge of what the reference

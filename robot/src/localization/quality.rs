@@ -5,9 +5,9 @@
 //! So every answer is examined the same way afterwards, against the reference scan:
 //!
 //! - **inliers**: each current point, moved by the answer, is compared with the reference's
-//!   surface near it — the line through its nearest reference point and that point's neighbour
-//!   in scan order (point to line, as Censi's PL-ICP), or the point itself where the scan has no
-//!   neighbour near — and is an inlier within [`TrustRule::inlier_m`];
+//!   surface near it — the line fitted to its nearest reference point's neighbours in scan
+//!   order (point to line, as Censi's PL-ICP), or the point itself where the scan
+//!   has no neighbour near — and is an inlier within [`TrustRule::inlier_m`];
 //! - **residual**: the root mean square of the inliers' distances;
 //! - **covariance**: the Fisher information of the inliers' point-to-line constraints,
 //!   `I = Σ J Jᵀ / s²` with `J = (n_x, n_y, n · ∂p/∂θ)` and `s` the residual (Censi, "An accurate
@@ -189,6 +189,7 @@ pub fn polish(
             let e = constraint.residual;
             if let Some(jac) = constraint.jacobian
                 && e.abs() <= gate
+                && !constraint.beyond
             {
                 accumulate(&mut h, &mut g, jac, e, 1.0 / (1.0 + (e / c).powi(2)));
             }
@@ -211,6 +212,9 @@ struct Constraint {
     residual: f64,
     /// The residual's derivatives by x, y and θ, for a point on a line.
     jacobian: Option<[f64; 3]>,
+    /// Whether the point lies past the ends of the reference points its line was fitted to
+    /// (by more than [`END_MARGIN_M`]): the line's direction, extrapolated, would twist it.
+    beyond: bool,
 }
 
 /// Each current point's [`Constraint`] at `pose`; with `last`, each point's last nearest
@@ -232,18 +236,24 @@ fn constraints<'a>(
             None => reference.tree.nearest_from(q, hint)?,
         };
         hint = Some(j);
-        Some(match surface_normal(&reference.points.xy, j) {
-            Some(n) => {
-                let a = reference.points.xy[j];
+        Some(match reference.surface(j) {
+            Some(&Surface {
+                normal: n,
+                anchor: a,
+                reach,
+            }) => {
                 Constraint {
                     residual: n[0] * (q[0] - a[0]) + n[1] * (q[1] - a[1]),
                     // ∂q/∂θ = (−r_y, r_x).
                     jacobian: Some([n[0], n[1], -n[0] * r[1] + n[1] * r[0]]),
+                    beyond: (n[1] * (q[0] - a[0]) - n[0] * (q[1] - a[1])).abs()
+                        > reach + END_MARGIN_M,
                 }
             }
             None => Constraint {
                 residual: d2.sqrt(),
                 jacobian: None,
+                beyond: false,
             },
         })
     })
@@ -259,46 +269,86 @@ pub(super) fn accumulate(h: &mut [[f64; 3]; 3], g: &mut [f64; 3], jac: [f64; 3],
     }
 }
 
-/// The unit normal of the reference's surface at point `j`: across the chord through the scan's
-/// points up to [`SPAN`] either side of `j` in scan order, as long as consecutive points lie near
-/// enough to be on one surface and `j` lies on that chord (a wider chord averages the range
-/// noise out of the direction); else across the line through `j` and its nearer neighbour;
-/// `None` for a lone point.
-fn surface_normal(points: &[[f64; 2]], j: usize) -> Option<[f64; 2]> {
-    /// Neighbours farther apart than this are taken to lie on different surfaces, metres.
+/// The reference's surface at one of its points: a line, for point-to-line residuals.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub(super) struct Surface {
+    /// The line's unit normal.
+    pub normal: [f64; 2],
+    /// A point of the line.
+    pub anchor: [f64; 2],
+    /// How far along the line from `anchor` the points it was fitted to reach, metres: past
+    /// that (and [`END_MARGIN_M`]) the polish does not hold a point to it.
+    pub reach: f64,
+}
+
+/// The reference's surface at each of its points ([`surface_at`]), in scan order.
+pub(super) fn surfaces(points: &[[f64; 2]]) -> Vec<Option<Surface>> {
+    (0..points.len()).map(|j| surface_at(points, j)).collect()
+}
+
+/// The reference's surface at point `j`. Its direction is the chord between the farthest
+/// points up to [`SPAN`] either side of `j` in scan order that lie near `j` for their gap in
+/// order (an outlier between them is skipped, not taken for the surface's end), as long as `j`
+/// lies on that chord (a corner within the span does not); the line passes through the mean of
+/// those points lying on the chord, so the range noise of `j` alone does not place it. Else the
+/// line through `j` and its nearer neighbour; `None` for a lone point.
+fn surface_at(points: &[[f64; 2]], j: usize) -> Option<Surface> {
+    /// Neighbours farther apart than this per step in scan order are taken to lie on different
+    /// surfaces, metres.
     const MAX_GAP_M: f64 = 0.3;
-    /// How far `j` may lie off the chord, metres (a corner within the span does not).
+    /// How far a point may lie off the chord, metres (a corner within the span does not).
     const STRAIGHT_M: f64 = 0.02;
     let d2 = |a: [f64; 2], b: [f64; 2]| (b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2);
-    let near = |k: usize, l: usize| d2(points[k], points[l]) <= MAX_GAP_M * MAX_GAP_M;
     let normal = |a: [f64; 2], b: [f64; 2]| {
         let d = d2(a, b).sqrt();
         (d > 1e-6).then(|| [-(b[1] - a[1]) / d, (b[0] - a[0]) / d])
     };
-    let (mut lo, mut hi) = (j, j);
-    while lo > 0 && j - lo < SPAN && near(lo - 1, lo) {
-        lo -= 1;
-    }
-    while hi + 1 < points.len() && hi - j < SPAN && near(hi, hi + 1) {
-        hi += 1;
-    }
-    if lo < j && j < hi {
-        let a = points[j];
-        if let Some(n) = normal(points[lo], points[hi]) {
-            let off = n[0] * (a[0] - points[lo][0]) + n[1] * (a[1] - points[lo][1]);
-            if off.abs() <= STRAIGHT_M {
-                return Some(n);
-            }
+    let a = points[j];
+    // Points within SPAN of j in scan order and near enough to j for their gap in order: an
+    // outlier between them is skipped, not taken as the surface's end.
+    let near = |k: usize| {
+        let gap = MAX_GAP_M * k.abs_diff(j) as f64;
+        d2(a, points[k]) <= gap * gap
+    };
+    let lo = (j.saturating_sub(SPAN)..j).find(|&k| near(k));
+    let hi = (j + 1..(j + SPAN + 1).min(points.len()))
+        .rev()
+        .find(|&k| near(k));
+    if let (Some(lo), Some(hi)) = (lo, hi)
+        && let Some(n) = normal(points[lo], points[hi])
+    {
+        let off = |p: [f64; 2]| n[0] * (p[0] - points[lo][0]) + n[1] * (p[1] - points[lo][1]);
+        if off(a).abs() <= STRAIGHT_M {
+            // Through the mean of the points on the chord: the range noise of `j` alone does
+            // not place the line.
+            let on = || (lo..=hi).filter(|&k| near(k) && off(points[k]).abs() <= STRAIGHT_M);
+            let (sum, count) = on().fold(([0.0, 0.0], 0.0), |(m, n), k| {
+                ([m[0] + points[k][0], m[1] + points[k][1]], n + 1.0)
+            });
+            let anchor = [sum[0] / count, sum[1] / count];
+            let along = |p: [f64; 2]| (n[1] * (p[0] - anchor[0]) - n[0] * (p[1] - anchor[1])).abs();
+            return Some(Surface {
+                normal: n,
+                anchor,
+                reach: on().map(|k| along(points[k])).fold(0.0, f64::max),
+            });
         }
     }
     // The nearer neighbour on the same surface.
     let k = [j.checked_sub(1), (j + 1 < points.len()).then_some(j + 1)]
         .into_iter()
         .flatten()
-        .filter(|&k| near(j, k))
-        .min_by(|&k, &l| d2(points[j], points[k]).total_cmp(&d2(points[j], points[l])))?;
-    normal(points[j], points[k])
+        .filter(|&k| d2(a, points[k]) <= MAX_GAP_M * MAX_GAP_M)
+        .min_by(|&k, &l| d2(a, points[k]).total_cmp(&d2(a, points[l])))?;
+    normal(a, points[k]).map(|normal| Surface {
+        normal,
+        anchor: a,
+        reach: d2(a, points[k]).sqrt(),
+    })
 }
+
+/// How far past the ends of its points a surface's line still holds, metres.
+const END_MARGIN_M: f64 = 0.05;
 
 /// Points either side of a reference point its surface's direction is taken from.
 const SPAN: usize = 3;
@@ -320,6 +370,53 @@ mod tests {
             xy: points.to_vec(),
             beam: (0..points.len()).collect(),
         })
+    }
+
+    /// A wall along x = 3 seen with ±1 cm of range noise and a far outlier among its points:
+    /// the surface at a point 1 cm off the wall skips the outlier, keeps the wall's direction,
+    /// and passes nearer the wall than the point itself (the mean of its neighbours).
+    #[test]
+    fn a_surface_skips_outliers_and_averages_the_noise() {
+        let mut points: Vec<[f64; 2]> = (0..40)
+            .map(|i| {
+                let noise = if i % 2 == 0 { 0.01 } else { -0.01 };
+                [3.0 + noise, -0.8 + 0.04 * i as f64]
+            })
+            .collect();
+        points[19] = [7.5, -0.04]; // an outlier beside point 20
+        let surfaces = surfaces(&points);
+        let s = surfaces[20].expect("a surface");
+        assert!(s.normal[0].abs() > 0.999, "{:?}", s.normal);
+        let off_wall = |p: [f64; 2]| (p[0] - 3.0).abs();
+        assert!(off_wall(points[20]) > 0.009);
+        assert!(off_wall(s.anchor) < 0.004, "{:?}", s.anchor);
+        // The points it was fitted to: 20's own and up to three either side but the outlier.
+        assert!(s.reach > 0.1 && s.reach < 0.14, "{}", s.reach);
+        // The outlier is a lone point: it has no surface of its own.
+        assert!(surfaces[19].is_none());
+    }
+
+    /// The polish holds a point to a surface only near the points it was fitted to: points
+    /// far along a wall the reference saw only a short piece of are not pulled onto that
+    /// piece's direction, extrapolated.
+    #[test]
+    fn the_polish_does_not_extrapolate_a_short_surface() {
+        // The reference saw 7 cm of a wall (x = 2), its direction 8° wrong (1 cm over 7 cm,
+        // centred on the wall), and a long wall across (y = 3).
+        let mut xy: Vec<[f64; 2]> = (0..8)
+            .map(|i| [2.0 + 0.01 * (i as f64 - 3.5) / 7.0, 0.01 * i as f64])
+            .collect();
+        xy.extend((0..120).map(|i| [1.8 - 0.03 * i as f64, 3.0]));
+        let reference = reference(&xy);
+        // The current scan, taken from the same pose: the wall across, and 1.2 m more of the
+        // first wall below what the reference saw.
+        let mut current: Vec<[f64; 2]> = (0..120).map(|i| [1.8 - 0.03 * i as f64, 3.0]).collect();
+        current.extend((1..=40).map(|i| [2.0, -0.03 * i as f64]));
+        let pose = polish(&reference, &current, Pose2::default(), 5, 0.01, 0.05);
+        // Only the points within 5 cm of the piece's ends pull: 11 mm. Held to the whole
+        // extrapolated line, the answer went 34 mm aside.
+        assert!(pose.x.abs() < 0.015, "{pose:?}");
+        assert!(pose.y.abs() < 1e-3 && pose.theta.abs() < 1e-3, "{pose:?}");
     }
 
     #[test]
