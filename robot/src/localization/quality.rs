@@ -322,8 +322,8 @@ fn surface_at(points: &[[f64; 2]], j: usize) -> Option<Surface> {
             // Through the mean of the points on the chord: the range noise of `j` alone does
             // not place the line.
             let on = || (lo..=hi).filter(|&k| near(k) && off(points[k]).abs() <= STRAIGHT_M);
-            let (sum, count) = on().fold(([0.0, 0.0], 0.0), |(m, n), k| {
-                ([m[0] + points[k][0], m[1] + points[k][1]], n + 1.0)
+            let (sum, count) = on().fold(([0.0, 0.0], 0.0), |(sum, count), k| {
+                ([sum[0] + points[k][0], sum[1] + points[k][1]], count + 1.0)
             });
             let anchor = [sum[0] / count, sum[1] / count];
             let along = |p: [f64; 2]| (n[1] * (p[0] - anchor[0]) - n[0] * (p[1] - anchor[1])).abs();
