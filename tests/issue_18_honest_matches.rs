@@ -322,10 +322,7 @@ fn a_wide_second_schedule_rescues_large_guesses() {
         (without, with) = (without + a, with + b);
         for set in sets.iter().filter(|s| s.name.starts_with("synthetic")) {
             let (a, b) = (right_answers(set, &narrow), right_answers(set, &both));
-            match synthetic.iter_mut().find(|(name, _, _)| *name == set.name) {
-                Some(row) => (row.1, row.2) = (row.1 + a, row.2 + b),
-                None => synthetic.push((set.name.clone(), a, b)),
-            }
+            tally(&mut synthetic, &set.name, a, b);
         }
     }
     assert!(!synthetic.is_empty());
@@ -361,10 +358,7 @@ fn the_answer_before_the_last_pass_helps_sparse_scans() {
             .filter(|s| s.name.starts_with("synthetic") || s.name.contains("edmonton"));
         for set in looked_at {
             let (a, b) = (right_answers(set, &last_only), right_answers(set, &both));
-            match counts.iter_mut().find(|(name, _, _)| *name == set.name) {
-                Some(row) => (row.1, row.2) = (row.1 + a, row.2 + b),
-                None => counts.push((set.name.clone(), a, b)),
-            }
+            tally(&mut counts, &set.name, a, b);
         }
     }
     assert_eq!(counts.len(), 3, "{counts:?}");
@@ -374,5 +368,13 @@ fn the_answer_before_the_last_pass_helps_sparse_scans() {
         } else {
             assert!(b + 1 >= *a, "{name}: {b} against {a}");
         }
+    }
+}
+
+/// Adds a row's right answers without (`a`) and with (`b`) to its running totals.
+fn tally(totals: &mut Vec<(String, usize, usize)>, row: &str, a: usize, b: usize) {
+    match totals.iter_mut().find(|(name, _, _)| name == row) {
+        Some(total) => (total.1, total.2) = (total.1 + a, total.2 + b),
+        None => totals.push((row.to_string(), a, b)),
     }
 }

@@ -393,10 +393,10 @@ impl Lorentz {
         // moves too little for another to come nearer (the same answers, sooner).
         let mut last = vec![None; current.len()];
         let mut result = MatchResult::unmatched(guess);
-        // The estimate before the last σ pass, when it is to be polished too.
+        // The estimate before the last σ pass (not the guess), when it is to be polished too.
         let mut before_last = None;
         for (pass, &sigma) in sigmas.iter().enumerate() {
-            if pass + 1 == sigmas.len() && self.polish_rounds > 0 {
+            if pass > 0 && pass + 1 == sigmas.len() && self.polish_rounds > 0 {
                 before_last = self.before_last_margin.map(|margin| (phi, margin));
             }
             result.settled = false;
