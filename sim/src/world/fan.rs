@@ -44,7 +44,7 @@ impl Turns {
     }
 
     /// How many rays lie below `x` (or at it, with `inclusive`).
-    #[inline]
+    #[inline(always)]
     fn count_below(&self, x: f64, inclusive: bool) -> usize {
         let below = |r: &f64| if inclusive { *r <= x } else { *r < x };
         if self.buckets.is_empty() {
@@ -173,9 +173,10 @@ impl WorldMap {
             buckets: Vec::new(),
         };
         let mut nearest = Nearest::default();
+        let level = rays.z.iter().all(|&z| z == 0.0);
         self.sweep(
             origin,
-            &rays,
+            (&rays, level),
             &turns,
             |v| wrap(pseudo_angle(v) - p0),
             max,
@@ -248,7 +249,16 @@ impl WorldMap {
             ];
             wrap(pseudo_angle(q) - p0)
         };
-        self.sweep(origin, &out.rays, turns, in_plane, max, &mut out.nearest);
+        // Both axes horizontal: every ray's vertical component is ±0.
+        let level = forward[2] == 0.0 && left[2] == 0.0;
+        self.sweep(
+            origin,
+            (&out.rays, level),
+            turns,
+            in_plane,
+            max,
+            &mut out.nearest,
+        );
     }
 
     /// The sweep: each face in reach tried against the rays whose pseudo-angle `rel` (from the
@@ -259,11 +269,14 @@ impl WorldMap {
     /// those from the first to the last that have not met a face nearer than that gap are tried:
     /// behind the first walls most faces are hidden whole. Ties go to the face listed first
     /// whatever the order, so the order changes the work, never the answer.
+    ///
+    /// `level` says every ray's vertical component is zero (`false` is always safe): faces
+    /// the origin's height misses are then skipped, and the others tried without a height.
     #[inline(always)]
     fn sweep(
         &self,
         origin: [f64; 3],
-        rays: &Rays,
+        (rays, level): (&Rays, bool),
         turns: &Turns,
         angle_of: impl Fn([f64; 2]) -> f64,
         max: f64,
@@ -271,7 +284,6 @@ impl WorldMap {
     ) {
         let n = turns.rel.len();
         nearest.reset(n);
-        let level = rays.z.iter().all(|&z| z == 0.0);
         let mut order = core::mem::take(&mut nearest.order);
         order.clear();
         for (i, face) in self.faces().iter().enumerate() {
@@ -306,30 +318,39 @@ impl WorldMap {
             // A ray that met a face nearer than this one's gap (with a margin far above the
             // rounding of either) cannot meet this one first, nor as near.
             let hidden = gap2 * (1.0 - 1e-9) - 1e-18;
-            let mut sweep = |range: core::ops::Range<usize>| {
-                rays.cross(face, i, origin, max, range, hidden, nearest)
-            };
             let a = [face.a[0] - origin[0], face.a[1] - origin[1]];
             let b = [face.b[0] - origin[0], face.b[1] - origin[1]];
             let cross = a[0] * b[1] - a[1] * b[0];
             let scale = a[0] * a[0] + a[1] * a[1] + b[0] * b[0] + b[1] * b[1];
-            if cross.abs() <= 1e-12 * scale {
+            // The rays the face's angle holds: one run, or two when it holds the first ray's
+            // direction.
+            let runs = if cross.abs() <= 1e-12 * scale {
                 // The origin is on the face's line (or an end): any ray may cross it.
-                sweep(0..n);
-                continue;
-            }
-            // Counter-clockwise from `lo` to `hi` is the face's side of the origin.
-            let (lo, hi) = if cross > 0.0 {
-                (angle_of(a), angle_of(b))
+                [0..n, 0..0]
             } else {
-                (angle_of(b), angle_of(a))
+                // Counter-clockwise from `lo` to `hi` is the face's side of the origin.
+                let (lo, hi) = if cross > 0.0 {
+                    (angle_of(a), angle_of(b))
+                } else {
+                    (angle_of(b), angle_of(a))
+                };
+                let start = wrap(lo - PAD);
+                let end = start + wrap(hi - lo) + 2.0 * PAD;
+                let from = turns.count_below(start, false);
+                let to = turns.count_below(end, true);
+                let wrapped = if end > 4.0 {
+                    0..turns.count_below(end - 4.0, true).min(from)
+                } else {
+                    0..0
+                };
+                [from..to, wrapped]
             };
-            let start = wrap(lo - PAD);
-            let end = start + wrap(hi - lo) + 2.0 * PAD;
-            let from = turns.count_below(start, false);
-            sweep(from..turns.count_below(end, true));
-            if end > 4.0 {
-                sweep(0..turns.count_below(end - 4.0, true).min(from));
+            for run in runs {
+                if level {
+                    rays.cross::<true>(face, i, origin, max, run, hidden, nearest);
+                } else {
+                    rays.cross::<false>(face, i, origin, max, run, hidden, nearest);
+                }
             }
         }
         nearest.order = order;
@@ -342,6 +363,9 @@ impl WorldMap {
 struct Nearest {
     t: Vec<f64>,
     face: Vec<u32>,
+    /// The largest distance in each block of [`BLOCK`] rays: a face whose gap lies beyond it
+    /// skips the block whole.
+    block_max: Vec<f64>,
     order: Vec<InReach>,
     /// The order's buffers: faces by band of gap, and how many fall in each band.
     sorted: Vec<InReach>,
@@ -356,6 +380,9 @@ struct InReach {
     face: u32,
     band: u32,
 }
+
+/// Rays in a block of [`Nearest::block_max`].
+const BLOCK: usize = 8;
 
 /// Width of the bands of gap the faces are ordered by, metres, and their number (the last holds
 /// every face farther).
@@ -392,6 +419,51 @@ impl Nearest {
         self.t.resize(n, f64::INFINITY);
         self.face.clear();
         self.face.resize(n, u32::MAX);
+        self.block_max.clear();
+        self.block_max.resize(n.div_ceil(BLOCK), f64::INFINITY);
+    }
+
+    /// The first and the last ray of `range` still open to a face whose squared gap is
+    /// `hidden` (`t · t >= hidden`: not having met a face nearer), `None` for none: the blocks
+    /// whose largest distance is not open are passed over whole (`t <= m` gives
+    /// `t · t <= m · m`, rounding being monotonic).
+    #[inline(always)]
+    fn open_span(&self, range: core::ops::Range<usize>, hidden: f64) -> Option<(usize, usize)> {
+        let open = |t: &f64| t * t >= hidden;
+        let mut k = range.start;
+        let first = loop {
+            if k >= range.end {
+                return None;
+            }
+            let stop = ((k / BLOCK + 1) * BLOCK).min(range.end);
+            if open(&self.block_max[k / BLOCK])
+                && let Some(p) = self.t[k..stop].iter().position(open)
+            {
+                break k + p;
+            }
+            k = stop;
+        };
+        // Ray `first` is open, so this finds one before passing it.
+        let mut k = range.end;
+        loop {
+            let begin = ((k - 1) / BLOCK * BLOCK).max(first);
+            if open(&self.block_max[(k - 1) / BLOCK])
+                && let Some(p) = self.t[begin..k].iter().rposition(open)
+            {
+                return Some((first, begin + p));
+            }
+            k = begin;
+        }
+    }
+
+    /// Brings the blocks holding the rays of `range` up to date after their distances fell.
+    #[inline(always)]
+    fn refresh_blocks(&mut self, range: core::ops::Range<usize>) {
+        let n = self.t.len();
+        for b in range.start / BLOCK..=(range.end - 1) / BLOCK {
+            let rays = &self.t[b * BLOCK..((b + 1) * BLOCK).min(n)];
+            self.block_max[b] = rays.iter().fold(0.0, |m: f64, &t| m.max(t));
+        }
     }
 
     /// Ray `k`'s nearest face: its distance and number.
@@ -514,9 +586,13 @@ impl Rays {
     /// `nearest` each ray's nearest crossing, the face listed first of equally near ones: the
     /// arithmetic of [`WorldMap::face_crossing`] step for step, without branches, so it runs at
     /// the processor's pace whichever rays cross.
+    ///
+    /// `LEVEL`: the rays have no vertical component and the origin's height lies within the
+    /// face's, so every crossing is at that height (`origin[2] + 0 · t`, `t` finite) and the
+    /// height is not tested.
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
-    fn cross(
+    fn cross<const LEVEL: bool>(
         &self,
         face: &Face,
         i: u32,
@@ -526,13 +602,10 @@ impl Rays {
         hidden: f64,
         nearest: &mut Nearest,
     ) {
-        let open = |t: &f64| t * t >= hidden;
-        let ts = &nearest.t[range.clone()];
-        let Some(first) = ts.iter().position(open) else {
+        let Some((first, last)) = nearest.open_span(range, hidden) else {
             return;
         };
-        let last = ts.iter().rposition(open).unwrap_or(first);
-        let range = range.start + first..range.start + last + 1;
+        let range = first..last + 1;
         let e = [face.b[0] - face.a[0], face.b[1] - face.a[1]];
         let w = [face.a[0] - origin[0], face.a[1] - origin[1]];
         let nt = w[0] * e[1] - w[1] * e[0];
@@ -554,19 +627,22 @@ impl Rays {
             let den = denom.abs();
             let (nt, nu) = if flip { (-nt, -nu) } else { (nt, nu) };
             let t = nt / den;
-            let height = origin[2] + dz * t;
+            let within = LEVEL || {
+                let height = origin[2] + dz * t;
+                (height >= bottom) & (height <= top)
+            };
             let crosses = (den > 1e-15 * (dx.abs() + dy.abs()))
                 & (nt >= 0.0)
                 & (nu >= 0.0)
                 & (nu <= den)
                 & (t <= max)
-                & (height >= bottom)
-                & (height <= top);
+                & within;
             let nearer = (t < *best_t) | ((t == *best_t) & (i < *best_face));
             let take = crosses & nearer;
             *best_t = if take { t } else { *best_t };
             *best_face = if take { i } else { *best_face };
         }
+        nearest.refresh_blocks(range);
     }
 }
 

@@ -474,6 +474,12 @@ fn nearer_disc<'d>(
     dir: [f64; 3],
     max: f64,
 ) -> Option<Contact> {
+    let mut discs = discs.peekable();
+    if discs.peek().is_none() {
+        // Nothing to meet: return before the ray's set-up for the discs (a square root and a
+        // division), which the compiler would otherwise hoist above the loop.
+        return best;
+    }
     for disc in discs {
         let limit = best.as_ref().map_or(max, |c| c.distance);
         if let Some(c) = disc_contact(disc, origin, dir, limit) {

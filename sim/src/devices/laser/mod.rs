@@ -357,8 +357,15 @@ impl LaserModel {
             let echo = match ends {
                 Some(echo) => echo,
                 None => {
+                    // The general path is a call: it gets a copy of the generator, so the
+                    // loop's own never has its address taken and can stay in registers
+                    // instead of going through memory at every draw.
+                    let mut copy = rng.clone();
                     let first = fan.hit(map, k);
-                    pulses.trace_near(frame.origin, dir, first.as_ref(), legs, rng)
+                    let echo =
+                        pulses.trace_near(frame.origin, dir, first.as_ref(), legs, &mut copy);
+                    *rng = copy;
+                    echo
                 }
             };
             *reading = self.reading_mm(echo, rng);
