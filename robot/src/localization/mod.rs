@@ -33,7 +33,7 @@ pub use grid::{Cell, GridBuilder, GridConfig, OccupancyGrid};
 pub use icp::LeastSquares;
 pub use kdtree::{KdTree, LastNearest};
 pub use level::{LEVEL_TOLERANCE_RAD, LevelLocaliser};
-pub use lorentz::{Lorentz, THESIS_SIGMAS, WIDE_SIGMAS};
+pub use lorentz::{DENSE_SIGMAS, Lorentz, THESIS_SIGMAS, WIDE_SIGMAS, beam_step};
 pub use map::{MapBuilder, MapConfig, MatchStats, Placed};
 pub use matcher::{
     Convergence, MAX_COORDINATE_M, MatchResult, MatcherKind, Reference, ScanMatcher,
