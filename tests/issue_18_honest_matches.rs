@@ -386,8 +386,7 @@ fn tally(totals: &mut Vec<(String, usize, usize)>, row: &str, a: usize, b: usize
 /// over seeds 5 and 11), it ends 4 and 32 mm from it, within the row's 5 cm (of the four such
 /// pairs found, the other two still leave it); and over two other seeds of 300 pairs a row it
 /// is right at least as often on the synthetic rows and Belgioioso, and more often over them
-/// all. Edmonton's 1°
-/// scans keep the thesis's schedule, with the same answers to the last bit.
+/// all. Edmonton's 1° scans keep the thesis's schedule, with the same answers to the last bit.
 #[test]
 fn dense_scans_narrow_their_sigma_throughout() {
     use robot::localization::{Lorentz, beam_step};

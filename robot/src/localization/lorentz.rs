@@ -533,8 +533,8 @@ mod tests {
     use crate::localization::RangeScan;
 
     /// A scan's beam step is read from its points: 0.5° for 361 beams over 180°, also with
-    /// beams missing (no return) and with a few points far off; none without two neighbours;
-    /// and the schedule follows it.
+    /// beams missing (no return) and ranges jumping from beam to beam; none without two
+    /// neighbouring beams; and the schedule follows it.
     #[test]
     fn the_beam_step_picks_the_schedule() {
         let scan = |beams: usize, fov_deg: f64, ranges: &dyn Fn(usize) -> f64| {
