@@ -100,14 +100,20 @@ pub struct Lorentz {
 pub const DENSE_SIGMAS: [f64; 3] = [0.05, 0.02, 0.005];
 
 /// The angle between a scan's neighbouring beams: the median, over points of consecutive
-/// beams, of the angle between their bearings from the laser. `None` with no two such points.
+/// beams, of the angle between them seen from the laser (one arctangent of their cross and dot
+/// products). `None` with no two such points.
 pub fn beam_step(current: &ScanPoints) -> Option<f64> {
     let mut steps: Vec<f64> = current
         .xy
         .windows(2)
         .zip(current.beam.windows(2))
         .filter(|(_, beams)| beams[1] == beams[0] + 1)
-        .map(|(p, _)| wrap_angle(p[1][1].atan2(p[1][0]) - p[0][1].atan2(p[0][0])).abs())
+        .map(|(p, _)| {
+            let (a, b) = (p[0], p[1]);
+            (a[0] * b[1] - a[1] * b[0])
+                .atan2(a[0] * b[0] + a[1] * b[1])
+                .abs()
+        })
         .filter(|step| step.is_finite())
         .collect();
     if steps.is_empty() {
