@@ -384,9 +384,11 @@ fn tally(totals: &mut Vec<(String, usize, usize)>, row: &str, a: usize, b: usize
 /// the points that see what the reference did not pull the answer aside. Started at the truth
 /// of two synthetic pairs the thesis's schedule leaves for places 92 and 57 mm away (found
 /// over seeds 5 and 11), it ends 4 and 32 mm from it, within the row's 5 cm (of the four such
-/// pairs found, the other two still leave it); and over two other seeds of 300 pairs a row it
+/// pairs found, the other two still leave it); and over four other seeds of 300 pairs a row it
 /// is right at least as often on the synthetic rows and Belgioioso, and more often over them
-/// all. Edmonton's 1° scans keep the thesis's schedule, with the same answers to the last bit.
+/// all. (Per seed a row can lose a pair: over seeds 1–12 only seed 4's 20 % row did, 300 →
+/// 299, while the rows gained 14 pairs in all.) Edmonton's 1° scans keep the thesis's
+/// schedule, with the same answers to the last bit.
 #[test]
 fn dense_scans_narrow_their_sigma_throughout() {
     use robot::localization::{Lorentz, beam_step};
@@ -419,7 +421,7 @@ fn dense_scans_narrow_their_sigma_throughout() {
         );
     }
     let mut counts = Vec::new();
-    for seed in [7, 8] {
+    for seed in [7, 8, 9, 10] {
         for set in sets(300, seed) {
             let dense = beam_step(&set.cases[0].current.points())
                 .is_some_and(|step| step < 0.75f64.to_radians());
