@@ -89,7 +89,8 @@ impl WorldMap {
                 ends: [sub(c, apex), sub(d, apex)],
             });
         }
-        out[first..].sort_unstable_by(|x, y| x.gap.total_cmp(&y.gap).then(x.face.cmp(&y.face)));
+        // A gap is a distance (zero or more), whose bits order as its values.
+        out[first..].sort_unstable_by_key(|x| (x.gap.to_bits(), x.face));
         true
     }
 

@@ -417,7 +417,7 @@ impl WorldMap {
 
     /// The hit on face `i`, `t` metres along `dir`.
     #[inline]
-    pub(super) fn face_hit(&self, i: usize, t: f64, dir: [f64; 3]) -> Hit {
+    pub(crate) fn face_hit(&self, i: usize, t: f64, dir: [f64; 3]) -> Hit {
         let [nx, ny] = self.normals[i];
         let mut normal = [nx, ny, 0.0];
         if normal[0] * dir[0] + normal[1] * dir[1] > 0.0 {

@@ -94,6 +94,7 @@ pub enum Echo {
 }
 
 /// What the pulse met next.
+#[derive(Copy, Clone, Debug)]
 struct Contact {
     distance: f64,
     normal: [f64; 3],
@@ -234,19 +235,15 @@ impl<'a> Pulses<'a> {
         legs: &mut Legs,
         rng: &mut SimRng,
     ) -> Echo {
-        // Most beams end on the first surface, matte or black: answered here, as the general
-        // path below would answer (the same draw for a black one), without its call.
-        if let Some(hit) = first
-            && self.plain()
-        {
-            let n = hit.normal;
-            let along = dir[0] * n[0] + dir[1] * n[1] + dir[2] * n[2];
-            let cos_in = (-along).clamp(-1.0, 1.0);
-            if let Some(echo) = self.ends_on(hit.material, cos_in, hit.distance, rng) {
-                return echo;
-            }
+        if self.max_range <= 0.0 {
+            return Echo::Lost;
         }
-        self.follow(origin, dir, first, legs, rng)
+        // The first leg starts inside the robot: only later legs can meet its body.
+        let wall = first.map(|&hit| Contact::from(hit));
+        match nearer_disc(wall, self.others.iter(), origin, dir, self.max_range) {
+            Some(contact) => self.first_contact(origin, dir, contact, legs, rng),
+            None => Echo::Lost,
+        }
     }
 
     /// Whether [`Pulses::off_face`] may answer a beam: no other robot to meet, a range to
@@ -256,46 +253,94 @@ impl<'a> Pulses<'a> {
         self.others.is_empty() && self.max_range > 0.0
     }
 
-    /// The echo of a level beam (`dir[2]` zero) whose first surface is a face with the plan
-    /// normal `normal` (either side), of `material`, `t` metres away, when the pulse ends there
-    /// (matte, black, or lost at grazing incidence): what [`Pulses::trace_near`] answers, the
-    /// same draws in the same order. `None` for glass and metal met nearer the normal than
-    /// grazing, which [`Pulses::trace_near`] must follow. Only for [`Pulses::plain`] pulses.
+    /// [`Pulses::trace_near`] for a level beam (`dir[2]` zero) whose first surface is face
+    /// `face`, `t` metres away, as a scan's sweep finds it: the same echo from the same draws,
+    /// the hit built only for a pulse that goes on. Only for [`Pulses::plain`] pulses.
     #[inline(always)]
     pub fn off_face(
         &self,
+        origin: [f64; 3],
         dir: [f64; 3],
-        t: f64,
-        normal: [f64; 2],
-        material: Material,
+        (t, face): (f64, usize),
+        legs: &mut Legs,
         rng: &mut SimRng,
-    ) -> Option<Echo> {
+    ) -> Echo {
         // The hit's normal faces the ray: the cosine of the incidence is |dir · normal|.
+        let normal = self.map.face_normal(face);
         let cos_in = (dir[0] * normal[0] + dir[1] * normal[1])
             .abs()
             .clamp(-1.0, 1.0);
-        self.ends_on(material, cos_in, t, rng)
+        let material = self.map.faces()[face].material;
+        match self.fate(material, cos_in, t, rng) {
+            Fate::Ends(echo) => echo,
+            fate => {
+                let contact = Contact::from(self.map.face_hit(face, t, dir));
+                self.go_on(origin, dir, (contact, fate), legs, rng)
+            }
+        }
     }
 
-    /// A pulse meeting `material` at incidence cosine `cos_in`, `distance` along its path:
-    /// its echo when it ends there, `None` when it goes on (glass, metal).
+    /// The echo of a pulse from `origin` along `dir` whose first leg ends at `contact`: most
+    /// end there (matte, black, grazing); the others go on.
     #[inline(always)]
-    fn ends_on(
+    fn first_contact(
         &self,
-        material: Material,
-        cos_in: f64,
-        distance: f64,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        contact: Contact,
+        legs: &mut Legs,
         rng: &mut SimRng,
-    ) -> Option<Echo> {
+    ) -> Echo {
+        let travelled = contact.distance;
+        match self.fate(contact.material, contact.cos_in(dir), travelled, rng) {
+            Fate::Ends(echo) => echo,
+            fate => self.go_on(origin, dir, (contact, fate), legs, rng),
+        }
+    }
+
+    /// [`Pulses::onwards`], a call, given a copy of the generator: so a caller's own never
+    /// has its address taken and can stay in registers instead of going through memory at
+    /// every draw.
+    #[inline(always)]
+    fn go_on(
+        &self,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        first: (Contact, Fate),
+        legs: &mut Legs,
+        rng: &mut SimRng,
+    ) -> Echo {
+        let mut copy = rng.clone();
+        let echo = self.onwards(origin, dir, first, legs, &mut copy);
+        *rng = copy;
+        echo
+    }
+
+    /// What a surface of `material` met at incidence cosine `cos_in` (larger is nearer the
+    /// normal), `travelled` metres along the pulse's path, does with the pulse. The draws
+    /// come in a fixed order: none for matte or metal, one for black, one for glass met off
+    /// its normal.
+    #[inline(always)]
+    fn fate(&self, material: Material, cos_in: f64, travelled: f64, rng: &mut SimRng) -> Fate {
+        let prepared = &self.prepared;
+        if cos_in <= prepared.cos_grazing {
+            return Fate::Ends(Echo::Lost);
+        }
         match material {
-            Material::Glass | Material::Metal => None,
-            _ if cos_in <= self.prepared.cos_grazing => Some(Echo::Lost),
-            Material::Matte => Some(Echo::Range(distance)),
-            Material::Black => Some(if rng.random_bool(self.prepared.black_return(cos_in)) {
-                Echo::Range(distance)
+            Material::Matte => Fate::Ends(Echo::Range(travelled)),
+            Material::Black => Fate::Ends(if rng.random_bool(prepared.black_return(cos_in)) {
+                Echo::Range(travelled)
             } else {
                 Echo::Lost
             }),
+            Material::Glass if cos_in > prepared.cos_glass_return => {
+                Fate::Ends(Echo::Range(travelled))
+            }
+            Material::Glass if rng.random_bool(prepared.optics.glass_transparent) => Fate::Through,
+            Material::Metal if cos_in > prepared.cos_metal_return => {
+                Fate::Ends(Echo::Range(travelled))
+            }
+            Material::Glass | Material::Metal => Fate::Reflects,
         }
     }
 
@@ -355,101 +400,146 @@ impl<'a> Pulses<'a> {
         }
     }
 
-    /// The pulse's legs, surface by surface, for [`Pulses::trace_near`].
+    /// The pulse's legs after its first: the first ended at `first`, on a surface that let
+    /// the pulse through or reflected it (`Fate::Through`, `Fate::Reflects`). The second leg
+    /// tries only the faces of its cone ([`Legs`]); the few legs after go through
+    /// [`Pulses::later_legs`].
     #[inline(never)]
-    fn follow(
+    fn onwards(
         &self,
         origin: [f64; 3],
         dir: [f64; 3],
-        first: Option<&Hit>,
+        (first, fate): (Contact, Fate),
         legs: &mut Legs,
         rng: &mut SimRng,
     ) -> Echo {
-        let prepared = &self.prepared;
-        let optics = &prepared.optics;
-        let mut travelled = 0.0;
-        let (mut o, mut d) = (origin, dir);
-        // The face the first leg ended on, and whether the pulse went through it.
-        let mut left: Option<(usize, bool)> = None;
-        for leg in 0..=optics.max_bounces {
-            let remaining = self.max_range - travelled;
-            if remaining <= 0.0 {
-                return Echo::Lost;
-            }
-            // The first leg starts inside the robot: only later legs can meet its body.
-            let contact = if leg == 0 {
-                let wall = first.map(|&hit| Contact::from(hit));
-                nearer_disc(wall, self.others.iter(), o, d, remaining)
-            } else {
-                let wall = match left.take() {
-                    Some(face) if leg == 1 => {
-                        self.cast_second((o, d, remaining), origin, face, legs)
-                    }
-                    _ => self.cast(o, d, remaining, legs.hint),
-                };
-                if leg == 1
-                    && let Some(Hit {
-                        surface: Surface::Face(i),
-                        ..
-                    }) = wall
+        if self.prepared.optics.max_bounces == 0 {
+            return Echo::Lost;
+        }
+        let mut pulse = Pulse {
+            o: origin,
+            d: dir,
+            travelled: first.distance,
+        };
+        pulse.leave(&first, fate);
+        let remaining = self.max_range - pulse.travelled;
+        if remaining <= 0.0 {
+            return Echo::Lost;
+        }
+        let (o, d) = (pulse.o, pulse.d);
+        let wall = match first.face {
+            Some(i) => {
+                let through = fate == Fate::Through;
+                let wall = self.cast_second((o, d, remaining), origin, (i, through), legs);
+                if let Some(Hit {
+                    surface: Surface::Face(i),
+                    ..
+                }) = wall
                 {
                     legs.hint = Some(i);
                 }
-                let wall = wall.map(Contact::from);
-                nearer_disc(wall, self.body.iter().chain(self.others), o, d, remaining)
-            };
-            let Some(contact) = contact else {
-                return Echo::Lost;
-            };
-            travelled += contact.distance;
-            let n = contact.normal;
-            let along = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
-            // The cosine of the incidence: larger is nearer the normal.
-            let cos_in = (-along).clamp(-1.0, 1.0);
-            if cos_in <= prepared.cos_grazing {
+                wall
+            }
+            None => self.cast(o, d, remaining, legs.hint),
+        };
+        let wall = wall.map(Contact::from);
+        let Some(contact) = nearer_disc(wall, self.body.iter().chain(self.others), o, d, remaining)
+        else {
+            return Echo::Lost;
+        };
+        pulse.travelled += contact.distance;
+        match self.fate(contact.material, contact.cos_in(d), pulse.travelled, rng) {
+            Fate::Ends(echo) => echo,
+            fate => self.later_legs(pulse, (contact, fate), legs.hint, rng),
+        }
+    }
+
+    /// The legs from the third on, each cast on its own: the second ended at `contact`, on a
+    /// surface that let the pulse through or reflected it.
+    #[inline(never)]
+    fn later_legs(
+        &self,
+        mut pulse: Pulse,
+        (mut contact, mut fate): (Contact, Fate),
+        hint: Option<usize>,
+        rng: &mut SimRng,
+    ) -> Echo {
+        for _ in 2..=self.prepared.optics.max_bounces {
+            pulse.leave(&contact, fate);
+            let remaining = self.max_range - pulse.travelled;
+            if remaining <= 0.0 {
                 return Echo::Lost;
             }
-            let hit = [0, 1, 2].map(|k| o[k] + d[k] * contact.distance);
-            match contact.material {
-                Material::Matte => return Echo::Range(travelled),
-                Material::Black => {
-                    return if rng.random_bool(prepared.black_return(cos_in)) {
-                        Echo::Range(travelled)
-                    } else {
-                        Echo::Lost
-                    };
-                }
-                Material::Glass if cos_in > prepared.cos_glass_return => {
-                    return Echo::Range(travelled);
-                }
-                Material::Glass if rng.random_bool(optics.glass_transparent) => {
-                    // Through the pane: go on from just beyond it.
-                    o = [0, 1, 2].map(|k| hit[k] + d[k] * NUDGE);
-                    left = (leg == 0)
-                        .then_some(contact.face)
-                        .flatten()
-                        .map(|i| (i, true));
-                }
-                Material::Metal if cos_in > prepared.cos_metal_return => {
-                    return Echo::Range(travelled);
-                }
-                Material::Glass | Material::Metal => {
-                    // Specular reflection, leaving from just in front of the surface.
-                    d = [0, 1, 2].map(|k| d[k] - 2.0 * along * n[k]);
-                    o = [0, 1, 2].map(|k| hit[k] + n[k] * NUDGE);
-                    left = (leg == 0)
-                        .then_some(contact.face)
-                        .flatten()
-                        .map(|i| (i, false));
-                }
+            let (o, d) = (pulse.o, pulse.d);
+            let wall = self.cast(o, d, remaining, hint).map(Contact::from);
+            let discs = self.body.iter().chain(self.others);
+            let Some(next) = nearer_disc(wall, discs, o, d, remaining) else {
+                return Echo::Lost;
+            };
+            contact = next;
+            pulse.travelled += contact.distance;
+            fate = self.fate(contact.material, contact.cos_in(d), pulse.travelled, rng);
+            if let Fate::Ends(echo) = fate {
+                return echo;
             }
         }
         Echo::Lost
     }
 }
 
+/// A pulse between surfaces: where its leg starts, its direction, and how far it has
+/// travelled.
+#[derive(Copy, Clone, Debug)]
+struct Pulse {
+    o: [f64; 3],
+    d: [f64; 3],
+    travelled: f64,
+}
+
+impl Pulse {
+    /// Leaves the surface its leg met at `contact`: on from just beyond a pane
+    /// (`Fate::Through`), or reflected from just in front of the surface (`Fate::Reflects`).
+    #[inline(always)]
+    fn leave(&mut self, contact: &Contact, fate: Fate) {
+        let (o, d) = (self.o, self.d);
+        let n = contact.normal;
+        let along = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+        let hit = [0, 1, 2].map(|k| o[k] + d[k] * contact.distance);
+        match fate {
+            Fate::Through => self.o = [0, 1, 2].map(|k| hit[k] + d[k] * NUDGE),
+            Fate::Reflects => {
+                self.d = [0, 1, 2].map(|k| d[k] - 2.0 * along * n[k]);
+                self.o = [0, 1, 2].map(|k| hit[k] + n[k] * NUDGE);
+            }
+            Fate::Ends(_) => {}
+        }
+    }
+}
+
+/// What a surface does with a pulse that meets it ([`Pulses::fate`]).
+#[derive(Copy, Clone, Debug, PartialEq)]
+enum Fate {
+    /// The pulse ends there: it comes back, or is lost.
+    Ends(Echo),
+    /// It goes on through the surface (a pane).
+    Through,
+    /// It is reflected (a mirror, metal, a pane).
+    Reflects,
+}
+
 /// How far a continued pulse starts from the surface it left, metres.
 const NUDGE: f64 = 1e-5;
+
+impl Contact {
+    /// The cosine of the incidence of a pulse along `d`: larger is nearer the normal (which
+    /// faces the pulse).
+    #[inline(always)]
+    fn cos_in(&self, d: [f64; 3]) -> f64 {
+        let n = self.normal;
+        let along = d[0] * n[0] + d[1] * n[1] + d[2] * n[2];
+        (-along).clamp(-1.0, 1.0)
+    }
+}
 
 impl From<Hit> for Contact {
     fn from(hit: Hit) -> Self {
@@ -696,11 +786,12 @@ points = [[1, -50], [1, 50]]
         assert_eq!(e, Echo::Lost);
     }
 
-    /// The inline answer for a beam that ends on its first matte surface is the general loop's
-    /// answer, echo for echo and draw for draw: from random poses in the lab (matte, black,
-    /// glass and metal walls), level and tilted, at every incidence, grazing included.
+    /// The answer of a level beam read off the sweep's columns (its face and distance) is the
+    /// general path's answer, echo for echo and draw for draw: from random poses in the lab
+    /// (matte, black, glass and metal walls), at every incidence, grazing included, on every
+    /// material, whether the pulse ends on its first face or goes on.
     #[test]
-    fn the_first_surface_shortcut_answers_as_the_loop() {
+    fn a_beam_read_off_the_sweep_answers_as_the_general_path() {
         use rand::SeedableRng;
         let text = std::fs::read_to_string(
             std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../worlds/lab.toml"),
@@ -711,7 +802,7 @@ points = [[1, -50], [1, 50]]
         let pulses = Pulses::new(&m, None, 32.0);
         let (min, max) = world.bounds();
         let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(3);
-        let (mut matte, mut black, mut level_faces) = (0, 0, 0);
+        let (mut matte, mut black, mut level_faces, mut specular) = (0, 0, 0, 0);
         for k in 0..20_000u64 {
             let origin = [
                 rng.random_range(min[0]..max[0]),
@@ -728,14 +819,9 @@ points = [[1, -50], [1, 50]]
             let first = m.cast(origin, dir, 32.0);
             matte += usize::from(first.is_some_and(|h| h.material == Material::Matte));
             black += usize::from(first.is_some_and(|h| h.material == Material::Black));
-            let (mut r1, mut r2) = (crate::rng::substream(9, k), crate::rng::substream(9, k));
-            let short =
+            let mut r1 = crate::rng::substream(9, k);
+            let general =
                 pulses.trace_near(origin, dir, first.as_ref(), &mut Legs::default(), &mut r1);
-            let long = pulses.follow(origin, dir, first.as_ref(), &mut Legs::default(), &mut r2);
-            assert_eq!(short, long, "from {origin:?} along {dir:?}");
-            assert_eq!(r1.random::<u64>(), r2.random::<u64>(), "the same draws");
-            // A level beam answered from the sweep's columns: the face's plan normal and
-            // material, as a scan reads them.
             if let Some(Hit {
                 surface: Surface::Face(i),
                 distance,
@@ -744,18 +830,13 @@ points = [[1, -50], [1, 50]]
             }) = first
                 && dir[2] == 0.0
             {
-                let mut r3 = crate::rng::substream(9, k);
-                let off = pulses.off_face(dir, distance, m.face_normal(i), material, &mut r3);
-                let ends = matches!(material, Material::Matte | Material::Black);
-                assert_eq!(off.is_some(), ends, "{material:?}");
-                if let Some(echo) = off {
-                    assert_eq!(echo, long, "from {origin:?} along {dir:?}");
-                    let mut r2 = crate::rng::substream(9, k);
-                    let _ =
-                        pulses.follow(origin, dir, first.as_ref(), &mut Legs::default(), &mut r2);
-                    assert_eq!(r3.random::<u64>(), r2.random::<u64>(), "the same draws");
-                    level_faces += 1;
-                }
+                let mut r2 = crate::rng::substream(9, k);
+                let off =
+                    pulses.off_face(origin, dir, (distance, i), &mut Legs::default(), &mut r2);
+                assert_eq!(off, general, "from {origin:?} along {dir:?}");
+                assert_eq!(r1.random::<u64>(), r2.random::<u64>(), "the same draws");
+                level_faces += 1;
+                specular += usize::from(matches!(material, Material::Glass | Material::Metal));
             }
         }
         assert!(
@@ -764,5 +845,9 @@ points = [[1, -50], [1, 50]]
         );
         assert!(matte > 5000, "{matte} beams met matte first");
         assert!(black > 1000, "{black} beams met black first");
+        assert!(
+            specular > 500,
+            "{specular} level beams met glass or metal first"
+        );
     }
 }

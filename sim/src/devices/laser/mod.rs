@@ -345,28 +345,12 @@ impl LaserModel {
             .enumerate()
         {
             let dir = [x, y, z];
-            // A level beam ending on its first face, answered from the sweep's columns;
-            // any other through the general path (the same echo, the same draws).
-            let ends = (plain && z == 0.0 && face != u32::MAX)
-                .then(|| {
-                    let i = face as usize;
-                    let material = map.faces()[i].material;
-                    pulses.off_face(dir, t, map.face_normal(i), material, rng)
-                })
-                .flatten();
-            let echo = match ends {
-                Some(echo) => echo,
-                None => {
-                    // The general path is a call: it gets a copy of the generator, so the
-                    // loop's own never has its address taken and can stay in registers
-                    // instead of going through memory at every draw.
-                    let mut copy = rng.clone();
-                    let first = fan.hit(map, k);
-                    let echo =
-                        pulses.trace_near(frame.origin, dir, first.as_ref(), legs, &mut copy);
-                    *rng = copy;
-                    echo
-                }
+            // A level beam's first face is read off the sweep's columns; any other beam's
+            // first surface is built (the same echo, the same draws).
+            let echo = if plain && z == 0.0 && face != u32::MAX {
+                pulses.off_face(frame.origin, dir, (t, face as usize), legs, rng)
+            } else {
+                pulses.trace_near(frame.origin, dir, fan.hit(map, k).as_ref(), legs, rng)
             };
             *reading = self.reading_mm(echo, rng);
         }
