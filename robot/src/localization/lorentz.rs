@@ -3,6 +3,7 @@
 //! Newton–Levenberg–Marquardt, three times with σ = 2, 5 and 0.5 (§5.2); optionally with
 //! line-assisted association (§3.4.3).
 
+use super::correlative;
 use super::lines::{LineParams, lines_of};
 use super::matcher::{Convergence, MatchResult, Reference, ScanMatcher, solve3, transform_all};
 use super::quality::{MatchQuality, TrustRule, polish};
@@ -76,6 +77,11 @@ pub struct Lorentz {
     /// kept. Not in the thesis; empty (the default) leaves it out, and
     /// [`Lorentz::with_lines`] has `RESTARTS`.
     pub restarts: Vec<Pose2>,
+    /// When no start so far gave a trusted answer, the best starts of a coarse correlative
+    /// search over this window around the guess ([`correlative::best_starts`]), and how many:
+    /// the trusted answer with the most inliers is kept. Not in the thesis; `None` (the
+    /// default) leaves it out, and [`Lorentz::with_lines`] has [`COARSE`].
+    pub coarse: Option<(correlative::Window, usize)>,
     /// The σ schedule, metres, for scans whose beams lie closer than `dense_below_rad`
     /// (measured on the current scan, [`beam_step`]) instead of `sigmas_m`. Not in the thesis;
     /// empty (the default) leaves it out, and [`Lorentz::with_lines`] has [`DENSE_SIGMAS`].
@@ -183,6 +189,20 @@ pub const RESTARTS: [Pose2; 8] = [
     },
 ];
 
+/// The coarse search of [`Lorentz::with_lines`]: ±60 cm and ±30° around the guess
+/// ([`correlative::Window::WIDE`]), its three best headings at least 3° apart. From guesses
+/// σ 20 cm / 10° off the corrected real logs it raised the right answers from 0.9267 to 0.9303
+/// over seeds 1–12 (3,600 pairs) and from 0.9175 to 0.9225 over seeds 13–16, every other row
+/// of `twin matchers` unchanged.
+pub const COARSE: (correlative::Window, usize) = (correlative::Window::WIDE, 3);
+
+/// How much larger a share of the current points a coarse start's trusted answer must fit than
+/// the untrusted first answer to replace it. The coarse search looks up to 60 cm and 30° away,
+/// where a corridor offers look-alike places: on Edmonton's sparse scans, without a margin,
+/// it replaced 8 untrusted right answers in 3,600 by trusted wrong ones that fitted at most
+/// 6 points in 100 more.
+const COARSE_MARGIN: f64 = 0.08;
+
 impl Lorentz {
     /// The unit in which the thesis's σ values work for this laser: centimetres.
     pub const SIGMA_UNIT_M: f64 = 0.01;
@@ -203,6 +223,7 @@ impl Lorentz {
             before_last_margin: Some(0.01),
             wide_sigmas_m: WIDE_SIGMAS.to_vec(),
             restarts: RESTARTS.to_vec(),
+            coarse: Some(COARSE),
             dense_sigmas_m: DENSE_SIGMAS.to_vec(),
             dense_below_rad: 0.75f64.to_radians(),
             ..Lorentz::default()
@@ -330,6 +351,7 @@ impl Default for Lorentz {
             wide_sigmas_m: Vec::new(),
             wide_below: 0.7,
             restarts: Vec::new(),
+            coarse: None,
             dense_sigmas_m: Vec::new(),
             dense_below_rad: 0.0,
         }
@@ -417,6 +439,32 @@ impl ScanMatcher for Lorentz {
             let share = result.quality.inlier_share;
             if rule.trusts(&result.quality) && best.as_ref().is_none_or(|(_, s)| share > *s) {
                 best = Some((result, share));
+            }
+        }
+        if best.is_none()
+            && let Some((window, count)) = &self.coarse
+        {
+            let starts = correlative::best_starts(
+                &reference.points.xy,
+                &current.xy,
+                guess,
+                window,
+                (*count, 3),
+            );
+            for start in starts {
+                let mut result = self.passes(sigmas, reference, current, lines.as_ref(), start);
+                iterations += result.iterations;
+                if result.quality == MatchQuality::NONE {
+                    result.quality = rule.assess(reference, &current.xy, &result.pose);
+                }
+                let share = result.quality.inlier_share;
+                let clearly = share > first.quality.inlier_share + COARSE_MARGIN;
+                if rule.trusts(&result.quality)
+                    && clearly
+                    && best.as_ref().is_none_or(|(_, s)| share > *s)
+                {
+                    best = Some((result, share));
+                }
             }
         }
         let mut chosen = best.map_or(first, |(result, _)| result);

@@ -8,7 +8,7 @@
 //! |---|---|---|
 //! | `ls` | [`LeastSquares`] point-to-point ICP, the baseline | thesis §5.2 |
 //! | `lorentz` | [`Lorentz`]: Lorentzian error, Newton–Levenberg–Marquardt, σ 2 → 5 → 0.5 cm | thesis §3.4, App. F |
-//! | `lorentz-lines` | the same with line-assisted association; a point-to-line polish, a wide second σ schedule and restarts when an answer is not trusted (not in the thesis) | thesis §3.4.3, App. E.3 |
+//! | `lorentz-lines` | the same with line-assisted association; a point-to-line polish, a wide second σ schedule, restarts and a coarse correlative search when an answer is not trusted (not in the thesis) | thesis §3.4.3, App. E.3 |
 //! | `mbicp` | [`Mbicp`]: metric-based ICP | 002 §2.2 |
 //! | `pl-icp` | [`PointToLine`]: point-to-line ICP with CSM's defaults, the reference | Censi 2008 |
 //!
@@ -16,6 +16,7 @@
 //! matches into a trajectory and a point map (§3.5), with odometry queued and interpolated to
 //! each scan's stamp (002 §7.3.3). Everything is in metres and radians, in REP-103 axes.
 
+pub mod correlative;
 mod grid;
 mod icp;
 mod kdtree;
@@ -33,7 +34,7 @@ pub use grid::{Cell, GridBuilder, GridConfig, OccupancyGrid};
 pub use icp::LeastSquares;
 pub use kdtree::{KdTree, LastNearest};
 pub use level::{LEVEL_TOLERANCE_RAD, LevelLocaliser};
-pub use lorentz::{DENSE_SIGMAS, Lorentz, THESIS_SIGMAS, WIDE_SIGMAS, beam_step};
+pub use lorentz::{COARSE, DENSE_SIGMAS, Lorentz, THESIS_SIGMAS, WIDE_SIGMAS, beam_step};
 pub use map::{MapBuilder, MapConfig, MatchStats, Placed};
 pub use matcher::{
     Convergence, MAX_COORDINATE_M, MatchResult, MatcherKind, Reference, ScanMatcher,
