@@ -123,9 +123,8 @@ struct Grid {
 }
 
 impl Grid {
-    /// The grid of `points`, with a margin of the window's reach and a cell around it, so
-    /// every cell a translation of the window can read is inside; `None` when too large or a
-    /// point is not finite.
+    /// The grid of `points`, with a margin of the window's reach and two cells around them;
+    /// `None` when too large or a point is not finite.
     fn draw(points: &[[f64; 2]], window: &Window) -> Option<Grid> {
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for p in points {
@@ -173,7 +172,8 @@ impl Grid {
     }
 
     /// Adds to `sums` (a square of `2 reach + 1` translations, row by row) the score under the
-    /// point (`x`, `y`) moved by each translation of the window.
+    /// point (`x`, `y`) moved by each translation of the window that keeps it on the grid (off
+    /// the grid a point scores nothing).
     fn add_window(&self, x: f64, y: f64, reach: i64, sums: &mut [u32]) {
         let (i, j) = (
             ((x - self.origin[0]) / self.cell).floor(),
@@ -184,18 +184,21 @@ impl Grid {
         }
         let (i, j) = (i as i64, j as i64);
         let side = (2 * reach + 1) as usize;
-        let (first, last) = (i - reach, i + reach);
-        if first < 0 || last >= self.width {
-            return; // the point moved off the grid's sides scores nothing anywhere near
+        // The translations that keep the point's column on the grid: `lo..hi` of the row.
+        let first = i - reach;
+        let (lo, hi) = ((-first).max(0), (self.width - first).min(side as i64));
+        if lo >= hi {
+            return;
         }
+        let (lo, hi) = (lo as usize, hi as usize);
         for (row, sum_row) in sums.chunks_exact_mut(side).enumerate() {
             let y = j - reach + row as i64;
             if !(0..self.height).contains(&y) {
                 continue;
             }
-            let start = (y * self.width + first) as usize;
-            let cells = &self.scores[start..start + side];
-            for (sum, &score) in sum_row.iter_mut().zip(cells) {
+            let start = (y * self.width + first + lo as i64) as usize;
+            let cells = &self.scores[start..start + (hi - lo)];
+            for (sum, &score) in sum_row[lo..hi].iter_mut().zip(cells) {
                 *sum += u32::from(score);
             }
         }
@@ -239,6 +242,35 @@ mod tests {
         for s in &starts[1..] {
             assert!((s.theta - best.theta).abs() > 3.5f64.to_radians());
         }
+    }
+
+    /// Points the guess puts outside the reference's extent still count where a translation
+    /// of the window brings them onto it: a wall and a stub seen from 35 cm down and left of
+    /// the guess, every current point outside the reference's bounding box under the guess.
+    #[test]
+    fn points_off_the_references_extent_still_count() {
+        // A wall along y, 3 m, and a stub along x, 30 cm: the reference is 30 cm wide.
+        let mut reference = Vec::new();
+        for k in 0..=6 {
+            reference.push([k as f64 * 0.05, 0.0]);
+        }
+        for k in 1..=60 {
+            reference.push([0.0, k as f64 * 0.05]);
+        }
+        let truth = Pose2::new(-0.35, -0.35, 0.0);
+        let current: Vec<[f64; 2]> = reference
+            .iter()
+            .map(|&p| {
+                let (x, y) = truth.inverse().transform_point(p[0], p[1]);
+                [x, y]
+            })
+            .collect();
+        let guess = Pose2::new(-0.7, -0.7, 0.0);
+        let starts = best_starts(&reference, &current, guess, &Window::WIDE, (1, 3));
+        let best = starts[0];
+        assert!((best.x - truth.x).abs() <= 0.05 + 1e-9, "{best:?}");
+        assert!((best.y - truth.y).abs() <= 0.05 + 1e-9, "{best:?}");
+        assert!(best.theta.abs() <= 1f64.to_radians() + 1e-9, "{best:?}");
     }
 
     /// Empty scans, a broken window and non-finite points give no start, without a panic.
