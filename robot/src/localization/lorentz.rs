@@ -77,10 +77,12 @@ pub struct Lorentz {
     /// kept. Not in the thesis; empty (the default) leaves it out, and
     /// [`Lorentz::with_lines`] has `RESTARTS`.
     pub restarts: Vec<Pose2>,
-    /// When no start so far gave a trusted answer, the best starts of a coarse correlative
-    /// search over this window around the guess ([`correlative::best_starts`]), and how many:
-    /// the trusted answer with the most inliers is kept. Not in the thesis; `None` (the
-    /// default) leaves it out, and [`Lorentz::with_lines`] has [`COARSE`].
+    /// When the restarts (so only with some) gave no trusted answer either, the best starts of
+    /// a coarse correlative search over this window around the guess
+    /// ([`correlative::best_starts`]), and how many: of their trusted answers that fit clearly
+    /// more points than the first answer (`COARSE_MARGIN`), the one with the most inliers is
+    /// kept. Not in the thesis; `None` (the default) leaves it out, and
+    /// [`Lorentz::with_lines`] has [`COARSE`].
     pub coarse: Option<(correlative::Window, usize)>,
     /// The σ schedule, metres, for scans whose beams lie closer than `dense_below_rad`
     /// (measured on the current scan, [`beam_step`]) instead of `sigmas_m`. Not in the thesis;
