@@ -209,6 +209,18 @@ impl Grid {
 mod tests {
     use super::*;
 
+    /// The current scan: the reference's points seen from `truth`.
+    fn seen_from(truth: Pose2, reference: &[[f64; 2]]) -> Vec<[f64; 2]> {
+        let from = truth.inverse();
+        reference
+            .iter()
+            .map(|&p| {
+                let (x, y) = from.transform_point(p[0], p[1]);
+                [x, y]
+            })
+            .collect()
+    }
+
     /// An L of walls seen from the origin, and the same seen from a pose 40 cm and 20° away:
     /// from a guess at the origin the best start lies within a step of the truth.
     #[test]
@@ -221,14 +233,7 @@ mod tests {
             reference.push([-1.0 + 0.01 * k as f64, -1.5 - 0.005 * k as f64]); // a slant
         }
         let truth = Pose2::new(0.4, -0.25, 20f64.to_radians());
-        // The current scan: the reference's points seen from `truth`.
-        let current: Vec<[f64; 2]> = reference
-            .iter()
-            .map(|&p| {
-                let (x, y) = truth.inverse().transform_point(p[0], p[1]);
-                [x, y]
-            })
-            .collect();
+        let current = seen_from(truth, &reference);
         let starts = best_starts(&reference, &current, Pose2::IDENTITY, &Window::WIDE, (3, 3));
         assert!(!starts.is_empty());
         let best = starts[0];
@@ -258,13 +263,7 @@ mod tests {
             reference.push([0.0, k as f64 * 0.05]);
         }
         let truth = Pose2::new(-0.35, -0.35, 0.0);
-        let current: Vec<[f64; 2]> = reference
-            .iter()
-            .map(|&p| {
-                let (x, y) = truth.inverse().transform_point(p[0], p[1]);
-                [x, y]
-            })
-            .collect();
+        let current = seen_from(truth, &reference);
         let guess = Pose2::new(-0.7, -0.7, 0.0);
         let starts = best_starts(&reference, &current, guess, &Window::WIDE, (1, 3));
         let best = starts[0];
