@@ -9,6 +9,7 @@
 //! For each heading of the window the current points are turned once, and every translation of
 //! the window adds up the grid under them, a row of translations at a time.
 
+use super::matcher::transform_all;
 use crate::Pose2;
 
 /// The poses tried around a guess: translations up to `half_m` each way in steps of `step_m`
@@ -72,14 +73,13 @@ pub fn best_starts(
     let mut sums = vec![0u32; side * side];
     // (score, heading index, translation index) of each heading's best translation.
     let mut bests: Vec<(u32, i64, usize)> = Vec::with_capacity((2 * turns + 1) as usize);
+    let mut moved = Vec::with_capacity(current.len());
     for turn in -turns..=turns {
         let theta = guess.theta + turn as f64 * window.step_rad;
-        let (s, c) = theta.sin_cos();
+        transform_all(&Pose2::new(guess.x, guess.y, theta), current, &mut moved);
         sums.iter_mut().for_each(|v| *v = 0);
-        for p in current {
-            let x = guess.x + c * p[0] - s * p[1];
-            let y = guess.y + s * p[0] + c * p[1];
-            grid.add_window(x, y, reach, &mut sums);
+        for p in &moved {
+            grid.add_window(p[0], p[1], reach, &mut sums);
         }
         let (best, &score) = sums
             .iter()

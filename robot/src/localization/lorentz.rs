@@ -399,16 +399,7 @@ impl ScanMatcher for Lorentz {
         let mut best: Option<(MatchResult, f64)> = None;
         let mut iterations = first.iterations;
         if !self.wide_sigmas_m.is_empty() && (!trusted || (loose && far)) {
-            let mut wide = self.passes(
-                &self.wide_sigmas_m,
-                reference,
-                current,
-                lines.as_ref(),
-                guess,
-            );
-            if wide.quality == MatchQuality::NONE {
-                wide.quality = rule.assess(reference, &current.xy, &wide.pose);
-            }
+            let wide = self.judged(&self.wide_sigmas_m, (reference, current), &lines, guess);
             iterations += wide.iterations;
             if rule.trusts(&wide.quality) {
                 let share = wide.quality.inlier_share;
@@ -431,42 +422,31 @@ impl ScanMatcher for Lorentz {
         }
         // Not trusted: start again from guesses around this one, and keep the trusted answer
         // that fits best (most inliers), if any.
+        let mut keep = |result: MatchResult, floor: f64, best: &mut Option<(MatchResult, f64)>| {
+            iterations += result.iterations;
+            let share = result.quality.inlier_share;
+            if rule.trusts(&result.quality)
+                && share > floor
+                && best.as_ref().is_none_or(|(_, s)| share > *s)
+            {
+                *best = Some((result, share));
+            }
+        };
         for offset in &self.restarts {
             let start = guess.compose(offset);
-            let mut result = self.passes(sigmas, reference, current, lines.as_ref(), start);
-            iterations += result.iterations;
-            if result.quality == MatchQuality::NONE {
-                result.quality = rule.assess(reference, &current.xy, &result.pose);
-            }
-            let share = result.quality.inlier_share;
-            if rule.trusts(&result.quality) && best.as_ref().is_none_or(|(_, s)| share > *s) {
-                best = Some((result, share));
-            }
+            let result = self.judged(sigmas, (reference, current), &lines, start);
+            keep(result, f64::NEG_INFINITY, &mut best);
         }
+        // Still nothing: the coarse search's starts, whose answers must fit clearly more
+        // points than the first.
         if best.is_none()
             && let Some((window, count)) = &self.coarse
         {
-            let starts = correlative::best_starts(
-                &reference.points.xy,
-                &current.xy,
-                guess,
-                window,
-                (*count, 3),
-            );
-            for start in starts {
-                let mut result = self.passes(sigmas, reference, current, lines.as_ref(), start);
-                iterations += result.iterations;
-                if result.quality == MatchQuality::NONE {
-                    result.quality = rule.assess(reference, &current.xy, &result.pose);
-                }
-                let share = result.quality.inlier_share;
-                let clearly = share > first.quality.inlier_share + COARSE_MARGIN;
-                if rule.trusts(&result.quality)
-                    && clearly
-                    && best.as_ref().is_none_or(|(_, s)| share > *s)
-                {
-                    best = Some((result, share));
-                }
+            let (from, to) = (&reference.points.xy, &current.xy);
+            let floor = first.quality.inlier_share + COARSE_MARGIN;
+            for start in correlative::best_starts(from, to, guess, window, (*count, 3)) {
+                let result = self.judged(sigmas, (reference, current), &lines, start);
+                keep(result, floor, &mut best);
             }
         }
         let mut chosen = best.map_or(first, |(result, _)| result);
@@ -486,6 +466,21 @@ impl Lorentz {
         } else {
             &self.sigmas_m
         }
+    }
+
+    /// [`Lorentz::passes`] from `start`, the answer judged by the trust rule.
+    fn judged(
+        &self,
+        sigmas: &[f64],
+        (reference, current): (&Reference, &ScanPoints),
+        lines: &Option<(Vec<Option<super::lines::Line>>, f64)>,
+        start: Pose2,
+    ) -> MatchResult {
+        let mut result = self.passes(sigmas, reference, current, lines.as_ref(), start);
+        if result.quality == MatchQuality::NONE {
+            result.quality = TrustRule::default().assess(reference, &current.xy, &result.pose);
+        }
+        result
     }
 
     /// The σ passes of `sigmas` and the polish from `guess`.
