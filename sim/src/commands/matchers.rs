@@ -11,16 +11,24 @@
 //!   centre), whose corrected poses give the truth to about 2 cm; the guess is the truth moved by
 //!   σ 5 cm and 2°, and in a last row by σ 20 cm and 10°; success is within 10 cm and 2°.
 //!
+//! A corrected log's poses are not perfect. For each pair the reference pose is judged by the
+//! same rule as an answer (the share of current points within 5 cm of the reference scan's
+//! surfaces, [`TrustRule::assess`]), and a failure is **disputed** when the matcher's answer is
+//! trusted and fits at least [`DISPUTE_RATIO`] times that share: the scans then side with the
+//! answer, not with the reference. Disputed failures are counted, never turned into successes;
+//! `--show` draws such a pair.
+//!
 //! Everything but the times is the same on every run and machine for a given seed.
 
 use super::CommandError;
 use crate::commands::montecarlo::pairs::PairMaker;
 use crate::config::{Outliers, RobotDescription, WorldDescription};
+use crate::output::pair::{Placement, write_pair_svg};
 use crate::rng::{self, SimRng};
 use rand::RngExt;
 use rand_distr::{Distribution, StandardNormal};
 use robot::Pose2;
-use robot::localization::{MatchResult, MatcherKind, RangeScan, Reference};
+use robot::localization::{MatchResult, MatcherKind, RangeScan, Reference, TrustRule};
 use robot::logs::LogEvent;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -192,7 +200,14 @@ pub struct Row {
     pub flag_precision: f64,
     /// Of the successful pairs, the share flagged (1 when none succeeded).
     pub flag_recall: f64,
+    /// Failures whose trusted answer fits at least [`DISPUTE_RATIO`] times the share of
+    /// current points the reference pose fits: pairs where the scans side with the answer.
+    pub disputed: usize,
 }
+
+/// How many times the reference pose's share of fitting points a trusted answer must fit for
+/// its failure to count as disputed by the scans.
+pub const DISPUTE_RATIO: f64 = 2.0;
 
 /// One match of one pair: what `pairs.csv` lists.
 #[derive(Clone, Debug)]
@@ -209,17 +224,22 @@ pub struct Outcome {
     pub success: bool,
     /// What the matcher answered.
     pub result: MatchResult,
+    /// The share of current points within 5 cm of the reference scan's surfaces with the
+    /// current scan at the reference (true) pose.
+    pub truth_share: f64,
+    /// A failure whose trusted answer fits at least [`DISPUTE_RATIO`] times `truth_share`.
+    pub disputed: bool,
 }
 
 /// The header of `pairs.csv`.
-pub const OUTCOMES_HEADER: &str = "set,pair,matcher,success,error_mm,error_deg,converged,settled,iterations,inliers,inlier_share,rms_mm,sigma_x_mm,sigma_y_mm,sigma_theta_deg,step_mm,step_deg";
+pub const OUTCOMES_HEADER: &str = "set,pair,matcher,success,error_mm,error_deg,converged,settled,iterations,inliers,inlier_share,rms_mm,sigma_x_mm,sigma_y_mm,sigma_theta_deg,step_mm,step_deg,truth_inlier_share,disputed";
 
 impl Outcome {
     /// The outcome as a line of `pairs.csv`.
     pub fn csv(&self) -> String {
         let q = &self.result.quality;
         format!(
-            "\"{}\",{},{},{},{:.2},{:.3},{},{},{},{},{:.4},{:.2},{:.2},{:.2},{:.3},{:.2},{:.3}",
+            "\"{}\",{},{},{},{:.2},{:.3},{},{},{},{},{:.4},{:.2},{:.2},{:.2},{:.3},{:.2},{:.3},{:.4},{}",
             self.set,
             self.pair,
             self.matcher,
@@ -237,6 +257,8 @@ impl Outcome {
             q.sigma[2].to_degrees(),
             q.step[0] * 1e3,
             q.step[1].to_degrees(),
+            self.truth_share,
+            u8::from(self.disputed),
         )
     }
 }
@@ -244,6 +266,7 @@ impl Outcome {
 /// Every matcher of `kinds` on every pair of `set`, one after the other on this thread; each
 /// match's outcome goes to `record`.
 pub fn evaluate(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Outcome)) -> Vec<Row> {
+    let truth_shares: Vec<f64> = set.cases.iter().map(truth_share).collect();
     kinds
         .iter()
         .map(|&kind| {
@@ -252,6 +275,7 @@ pub fn evaluate(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Out
             let mut errors_rad = Vec::with_capacity(set.cases.len());
             let mut micros = Vec::with_capacity(set.cases.len());
             let (mut success, mut flagged, mut both) = (0usize, 0usize, 0usize);
+            let mut disputed_count = 0;
             for (pair, case) in set.cases.iter().enumerate() {
                 let clock = Instant::now();
                 let reference = Reference::new(case.reference.points());
@@ -265,6 +289,11 @@ pub fn evaluate(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Out
                 both += usize::from(ok && result.converged);
                 errors_m.push(em);
                 errors_rad.push(er);
+                let truth_share = truth_shares[pair];
+                let disputed = !ok
+                    && result.converged
+                    && result.quality.inlier_share >= DISPUTE_RATIO * truth_share;
+                disputed_count += usize::from(disputed);
                 record(Outcome {
                     set: set.name.clone(),
                     pair,
@@ -272,6 +301,8 @@ pub fn evaluate(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Out
                     error: (em, er),
                     success: ok,
                     result,
+                    truth_share,
+                    disputed,
                 });
             }
             let n = set.cases.len().max(1) as f64;
@@ -290,9 +321,19 @@ pub fn evaluate(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Out
                 flagged: flagged as f64 / n,
                 flag_precision: share(both, flagged),
                 flag_recall: share(both, success),
+                disputed: disputed_count,
             }
         })
         .collect()
+}
+
+/// The share of the current points within 5 cm of the reference scan's surfaces with the
+/// current scan at the pair's true pose (the default [`TrustRule`]'s inliers).
+pub fn truth_share(case: &Case) -> f64 {
+    let reference = Reference::new(case.reference.points());
+    TrustRule::default()
+        .assess(&reference, &case.current.points().xy, &case.truth)
+        .inlier_share
 }
 
 /// The `q` quantile of `values` (nearest rank; 0 for none).
@@ -309,7 +350,7 @@ fn quantile(values: &mut [f64], q: f64) -> f64 {
 /// the same set (the same run, so the ratio travels between machines).
 pub fn table(rows: &[Row]) -> String {
     let mut out = String::from(
-        "| pairs | matcher | success | median / p95 error | median time | × first | flagged | flag precision / recall |\n|---|---|---|---|---|---|---|---|\n",
+        "| pairs | matcher | success | median / p95 error | median time | × first | flagged | flag precision / recall | failures disputed |\n|---|---|---|---|---|---|---|---|---|\n",
     );
     let mut first_us = f64::NAN;
     let mut last_set = "";
@@ -319,7 +360,7 @@ pub fn table(rows: &[Row]) -> String {
             last_set = &r.set;
         }
         out.push_str(&format!(
-            "| {} ({}) | {} | {:.3} | {:.1} / {:.1} mm, {:.2} / {:.2}° | {:.2} ms | {:.2} | {:.3} | {:.3} / {:.3} |\n",
+            "| {} ({}) | {} | {:.3} | {:.1} / {:.1} mm, {:.2} / {:.2}° | {:.2} ms | {:.2} | {:.3} | {:.3} / {:.3} | {} |\n",
             r.set,
             r.pairs,
             r.matcher,
@@ -333,6 +374,7 @@ pub fn table(rows: &[Row]) -> String {
             r.flagged,
             r.flag_precision,
             r.flag_recall,
+            r.disputed,
         ));
     }
     out
@@ -422,9 +464,87 @@ pub struct MatchersArgs {
     /// quality figures) into this folder too.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Draw one pair into `--out` as `pair-SET-PAIR.svg`: the reference scan, and the current
+    /// scan at the true pose and at each matcher's answer. `SET/PAIR`, where SET is part of a
+    /// row's name (`freiburg-101/248`, `20 %/7`).
+    #[arg(long, value_name = "SET/PAIR")]
+    pub show: Option<String>,
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+}
+
+/// Draws pair `pair` of the set whose name contains `name` (`--show NAME/PAIR`) into `dir`.
+fn show(
+    sets: &[CaseSet],
+    kinds: &[MatcherKind],
+    spec: &str,
+    dir: &Path,
+) -> Result<PathBuf, CommandError> {
+    let bad = |why: &'static str| CommandError::option("--show", why, spec);
+    let (name, pair) = spec
+        .rsplit_once('/')
+        .ok_or_else(|| bad("must be SET/PAIR, e.g. freiburg-101/248"))?;
+    let pair: usize = pair
+        .trim()
+        .parse()
+        .map_err(|_| bad("must end in a pair number after the slash"))?;
+    let set = sets
+        .iter()
+        .find(|s| !name.is_empty() && s.name.contains(name))
+        .ok_or_else(|| bad("must begin with part of a row's name (freiburg-101, 20 %)"))?;
+    let case = set.cases.get(pair).ok_or_else(|| {
+        CommandError::option(
+            "--show",
+            "must name a pair the row has (numbered from 0)",
+            format!("{spec}, of {} pairs", set.cases.len()),
+        )
+    })?;
+    let reference = Reference::new(case.reference.points());
+    let current = case.current.points();
+    let rule = TrustRule::default();
+    let mut placements = vec![Placement {
+        label: "the pose given as truth".to_string(),
+        pose: case.truth,
+        share: truth_share(case),
+    }];
+    for &kind in kinds.iter().take(4) {
+        let result = kind.build().align(&reference, &current, case.guess);
+        placements.push(Placement {
+            label: format!("the answer of {kind}"),
+            pose: result.pose,
+            share: rule
+                .assess(&reference, &current.xy, &result.pose)
+                .inlier_share,
+        });
+    }
+    let slug: String = set
+        .name
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
+        .collect();
+    let slug = slug
+        .split('-')
+        .filter(|part| !part.is_empty())
+        .collect::<Vec<_>>()
+        .join("-");
+    let path = dir.join(format!("pair-{slug}-{pair}.svg"));
+    let title = format!(
+        "{}, pair {pair}: current scan placed in the reference laser frame",
+        set.name
+    );
+    write_pair_svg(
+        &path,
+        &title,
+        &reference.points.xy,
+        &current.xy,
+        &placements,
+    )
+    .map_err(|source| CommandError::Write {
+        dir: dir.to_path_buf(),
+        source,
+    })?;
+    Ok(path)
 }
 
 /// `twin matchers`: the table on standard output.
@@ -442,6 +562,18 @@ pub fn main(args: MatchersArgs) -> Result<(), CommandError> {
         args.matchers.clone()
     };
     let sets = standard_sets(&args.root, args.pairs, args.seed)?;
+    if let Some(spec) = &args.show {
+        let dir = args.out.as_ref().ok_or_else(|| {
+            CommandError::option("--show", "needs --out DIR to write the picture in", spec)
+        })?;
+        std::fs::create_dir_all(dir).map_err(|source| CommandError::Write {
+            dir: dir.clone(),
+            source,
+        })?;
+        let path = show(&sets, &kinds, spec, dir)?;
+        say!("{}", path.display());
+        return Ok(());
+    }
     let total: usize = sets.iter().map(|s| s.cases.len() * kinds.len()).sum();
     let bar = super::bar(
         args.quiet,

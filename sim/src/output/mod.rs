@@ -10,6 +10,7 @@ pub mod figure;
 mod grid;
 pub mod logmap;
 mod mcap;
+pub mod pair;
 mod ply;
 mod reconstruction;
 mod render;
