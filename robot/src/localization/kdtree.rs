@@ -180,35 +180,54 @@ impl KdTree {
     }
 
     /// Searches the range `[lo, hi)`: near side first, the far side only when the splitting
-    /// line is nearer than the best so far.
+    /// line is nearer than the best so far (found on the near side included). A loop with the
+    /// far sides waiting on a stack, in the order a recursion would take them: the same points
+    /// visited in the same order, without a call per node.
     fn search<M: FnMut(usize, [f64; 2]) -> f64, O: Others>(
         &self,
         lo: usize,
         hi: usize,
         s: &mut Search<M, O>,
     ) {
-        if hi - lo <= LEAF {
+        // A far side waiting: its range and the squared gap to its splitting line (scaled).
+        // The tree halves its ranges, and holds fewer than 2³² points (their indices are
+        // `u32`), so 33 levels hold any.
+        let mut waiting = [(0u32, 0u32, 0.0f64); 34];
+        let mut top = 0;
+        let (mut lo, mut hi) = (lo, hi);
+        loop {
+            while hi - lo > LEAF {
+                let mid = (lo + hi) / 2;
+                let a = usize::from(self.axis[mid]);
+                let gap = s.q[a] - self.points[mid][a];
+                s.visit(self.index[mid] as usize, self.points[mid]);
+                let (near, far) = if gap < 0.0 {
+                    ((lo, mid), (mid + 1, hi))
+                } else {
+                    ((mid + 1, hi), (lo, mid))
+                };
+                waiting[top] = (far.0 as u32, far.1 as u32, s.bound_scale * gap * gap);
+                top += 1;
+                (lo, hi) = near;
+            }
             for k in lo..hi {
                 s.visit(self.index[k] as usize, self.points[k]);
             }
-            return;
-        }
-        let mid = (lo + hi) / 2;
-        let a = usize::from(self.axis[mid]);
-        let gap = s.q[a] - self.points[mid][a];
-        s.visit(self.index[mid] as usize, self.points[mid]);
-        let (near, far) = if gap < 0.0 {
-            ((lo, mid), (mid + 1, hi))
-        } else {
-            ((mid + 1, hi), (lo, mid))
-        };
-        self.search(near.0, near.1, s);
-        let bound = s.bound_scale * gap * gap;
-        if bound < s.best.1 {
-            self.search(far.0, far.1, s);
-        } else if far.0 < far.1 {
-            // Every point beyond the splitting line is at least that far.
-            s.others.at_least(bound);
+            loop {
+                if top == 0 {
+                    return;
+                }
+                top -= 1;
+                let (far_lo, far_hi, bound) = waiting[top];
+                let (far_lo, far_hi) = (far_lo as usize, far_hi as usize);
+                if bound < s.best.1 {
+                    (lo, hi) = (far_lo, far_hi);
+                    break;
+                } else if far_lo < far_hi {
+                    // Every point beyond the splitting line is at least that far.
+                    s.others.at_least(bound);
+                }
+            }
         }
     }
 }
@@ -395,6 +414,30 @@ mod tests {
             tree.nearest_from(nan, first.map(|(j, _)| j))
                 .map(|(j, _)| j)
         );
+    }
+
+    /// A large tree with long runs of repeated points and two clusters far apart: the walk's
+    /// stack holds every level, and the answers are brute force's.
+    #[test]
+    fn a_large_tree_with_repeated_points_answers_as_brute_force() {
+        let mut points = Vec::new();
+        for i in 0..120_000 {
+            let k = f64::from(i / 7); // seven copies of each point
+            points.push([(k * 0.618).fract() * 10.0, (k * 0.414).fract() * 10.0]);
+        }
+        points.extend((0..1000).map(|i| [1e4 + f64::from(i), -1e4]));
+        let tree = KdTree::new(&points);
+        for k in 0..300 {
+            let q = [
+                (k as f64 * 0.37).sin() * 12.0,
+                (k as f64 * 0.91).cos() * 12.0,
+            ];
+            let (i, d) = tree.nearest(q).unwrap();
+            assert_eq!(d, brute(&points, q), "query {q:?}");
+            assert_eq!(tree.nearest_from(q, Some(i)), Some((i, d)));
+        }
+        let far = [1e4 + 500.2, -1e4 + 0.1];
+        assert_eq!(tree.nearest(far).map(|(i, _)| i), Some(120_000 + 500));
     }
 
     #[test]
