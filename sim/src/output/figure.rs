@@ -197,6 +197,25 @@ pub fn grid_step(span: f64, pixels: f64) -> f64 {
         .unwrap_or(10.0 * decade)
 }
 
+/// The smallest and largest coordinates of the finite `points`, or a 2 m square around the
+/// origin when none is finite: the extent a plan view is fitted to.
+pub fn extent(points: impl IntoIterator<Item = [f64; 2]>) -> ([f64; 2], [f64; 2]) {
+    let (mut min, mut max) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in points {
+        if p[0].is_finite() && p[1].is_finite() {
+            for k in 0..2 {
+                min[k] = min[k].min(p[k]);
+                max[k] = max[k].max(p[k]);
+            }
+        }
+    }
+    if min[0].is_finite() {
+        (min, max)
+    } else {
+        ([-1.0, -1.0], [1.0, 1.0])
+    }
+}
+
 /// A plan view's mapping from metres to pixels: `min`..`max` (metres) drawn in the rectangle at
 /// `origin` (pixels, top left) at `scale` pixels per metre, y up.
 #[derive(Clone, Copy, Debug)]

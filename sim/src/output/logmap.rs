@@ -4,7 +4,7 @@
 //!
 //! A sharper map puts the same wall's points into fewer cells: [`occupied_cells`] counts them.
 
-use super::figure::{Layers, Plan, Swatch, open_svg};
+use super::figure::{Layers, Plan, Swatch, extent, open_svg};
 use super::svg::{path_data, xml_escape};
 use robot::Pose2;
 use std::collections::HashSet;
@@ -49,21 +49,10 @@ const CELLS: &str = "#1f3b73";
 const PATH: &str = "#d73027";
 
 fn render(panels: &[Panel<'_>]) -> String {
-    let (mut min, mut max) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for panel in panels {
+    let (min, max) = extent(panels.iter().flat_map(|panel| {
         let path = panel.path.iter().map(|p| [p.x, p.y]);
-        for p in panel.points.iter().copied().chain(path) {
-            if p[0].is_finite() && p[1].is_finite() {
-                for k in 0..2 {
-                    min[k] = min[k].min(p[k]);
-                    max[k] = max[k].max(p[k]);
-                }
-            }
-        }
-    }
-    if !min[0].is_finite() {
-        (min, max) = ([-1.0, -1.0], [1.0, 1.0]);
-    }
+        panel.points.iter().copied().chain(path)
+    }));
     let margin = 0.5;
     let span = (max[0] - min[0]).max(max[1] - min[1]).max(1.0) + 2.0 * margin;
     let scale = (PANEL - 30.0 - Plan::LEFT) / span;

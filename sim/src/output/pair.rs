@@ -3,7 +3,7 @@
 //! labelled with the share of its points within 5 cm of the reference's surfaces. It shows at a
 //! glance whether the scans side with the log's pose or with an answer.
 
-use super::figure::{Layers, Plan, Swatch, open_svg, xml_escape};
+use super::figure::{Layers, Plan, Swatch, extent, open_svg, xml_escape};
 use robot::Pose2;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -53,18 +53,7 @@ fn render(
                 .collect()
         })
         .collect();
-    let (mut min, mut max) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in reference.iter().chain(placed.iter().flatten()) {
-        if p[0].is_finite() && p[1].is_finite() {
-            for k in 0..2 {
-                min[k] = min[k].min(p[k]);
-                max[k] = max[k].max(p[k]);
-            }
-        }
-    }
-    if !min[0].is_finite() {
-        (min, max) = ([-1.0, -1.0], [1.0, 1.0]);
-    }
+    let (min, max) = extent(reference.iter().chain(placed.iter().flatten()).copied());
     let margin = 0.3;
     let (min, max) = (
         [min[0] - margin, min[1] - margin],
