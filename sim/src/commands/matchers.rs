@@ -266,7 +266,11 @@ impl Outcome {
 /// Every matcher of `kinds` on every pair of `set`, one after the other on this thread; each
 /// match's outcome goes to `record`.
 pub fn evaluate(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Outcome)) -> Vec<Row> {
-    let truth_shares: Vec<f64> = set.cases.iter().map(truth_share).collect();
+    let truth_shares: Vec<f64> = set
+        .cases
+        .iter()
+        .map(|case| truth_share(&Reference::new(case.reference.points()), case))
+        .collect();
     kinds
         .iter()
         .map(|&kind| {
@@ -328,11 +332,11 @@ pub fn evaluate(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Out
 }
 
 /// The share of the current points within 5 cm of the reference scan's surfaces with the
-/// current scan at the pair's true pose (the default [`TrustRule`]'s inliers).
-pub fn truth_share(case: &Case) -> f64 {
-    let reference = Reference::new(case.reference.points());
+/// current scan at the pair's true pose (the default [`TrustRule`]'s inliers); `reference` is
+/// the pair's reference scan, prepared.
+pub fn truth_share(reference: &Reference, case: &Case) -> f64 {
     TrustRule::default()
-        .assess(&reference, &case.current.points().xy, &case.truth)
+        .assess(reference, &case.current.points().xy, &case.truth)
         .inlier_share
 }
 
@@ -502,29 +506,23 @@ fn show(
     })?;
     let reference = Reference::new(case.reference.points());
     let current = case.current.points();
-    let rule = TrustRule::default();
     let mut placements = vec![Placement {
         label: "the pose given as truth".to_string(),
         pose: case.truth,
-        share: truth_share(case),
+        share: truth_share(&reference, case),
     }];
     for &kind in kinds.iter().take(4) {
+        // `align` judges every answer by the default rule: its quality is the share drawn.
         let result = kind.build().align(&reference, &current, case.guess);
         placements.push(Placement {
             label: format!("the answer of {kind}"),
             pose: result.pose,
-            share: rule
-                .assess(&reference, &current.xy, &result.pose)
-                .inlier_share,
+            share: result.quality.inlier_share,
         });
     }
-    let slug: String = set
+    let slug = set
         .name
-        .chars()
-        .map(|c| if c.is_ascii_alphanumeric() { c } else { '-' })
-        .collect();
-    let slug = slug
-        .split('-')
+        .split(|c: char| !c.is_ascii_alphanumeric())
         .filter(|part| !part.is_empty())
         .collect::<Vec<_>>()
         .join("-");
