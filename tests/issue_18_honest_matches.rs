@@ -452,10 +452,11 @@ fn dense_scans_narrow_their_sigma_throughout() {
 /// When no start gives a trusted answer (the guess, the wide schedule, the restarts), the
 /// line-assisted Lorentzian starts again from the best poses of a coarse correlative search
 /// 60 cm and 30° around the guess (`COARSE`), and keeps a trusted answer that fits clearly more
-/// points than its first. From guesses 20 cm and 10° off, two pairs the restarts leave 1.6 and
-/// 1.7 m from the truth (seeds 7 and 10) end within the row's 10 cm; over four other seeds of
-/// 300 pairs it is right more often on the large guesses, and Edmonton's sparse scans, whose
-/// corridors offer look-alike places within the window, lose no pair.
+/// points than its first. From guesses 20 cm and 10° off, two pairs the restarts leave 1.7 and
+/// 0.9 m from the truth (seed 8; the two of seeds 7 and 10 this test held before point-to-line
+/// residuals came in are now found without it) end within the row's 10 cm; over four other
+/// seeds of 300 pairs it is right more often on the large guesses, and Edmonton's sparse scans,
+/// whose corridors offer look-alike places within the window, lose no pair.
 #[test]
 fn a_coarse_search_finds_what_the_restarts_miss() {
     use robot::localization::{COARSE, Lorentz};
@@ -471,7 +472,7 @@ fn a_coarse_search_finds_what_the_restarts_miss() {
             .expect("the large guesses' row")
             .clone()
     };
-    for (seed, pair) in [(7, 180), (10, 50)] {
+    for (seed, pair) in [(8, 181), (8, 237)] {
         let set = large(&sets(300, seed));
         let one = CaseSet {
             cases: vec![set.cases[pair].clone()],
@@ -607,4 +608,105 @@ fn twin_matchers_shows_a_pair() {
             "{spec}: {stderr}"
         );
     }
+}
+
+/// On dense scans, in a search whose line normals spread (`LINE_RESIDUALS_SPREAD`), the
+/// line-assisted Lorentzian counts a point projected inside a reference line by its distance
+/// to that line alone, so the estimate no longer crawls along walls by what the projections
+/// move in one search. Over two seeds held out from the twelve it was chosen on (13 and 14, 150
+/// pairs a row): on every dense row it is right as often (a pair either way allowed; none moved
+/// over seeds 1–12) for fewer correspondence searches, a quarter fewer or more on the synthetic
+/// pairs without outliers and Belgioioso; Edmonton's sparse 1° scans keep the product form,
+/// with the same answers to the last bit.
+#[test]
+fn point_to_line_residuals_take_fewer_searches() {
+    use robot::localization::Lorentz;
+    let product = Lorentz {
+        line_residuals_spread: None,
+        ..Lorentz::with_lines()
+    };
+    let to_lines = Lorentz::with_lines();
+    // Per row: right answers and correspondence searches, the product form's and the new.
+    let mut rows: Vec<(String, [usize; 2], [Vec<u32>; 2])> = Vec::new();
+    for seed in [13, 14] {
+        for set in sets(150, seed) {
+            let at = match rows.iter().position(|r| r.0 == set.name) {
+                Some(at) => at,
+                None => {
+                    rows.push((set.name.clone(), [0, 0], [Vec::new(), Vec::new()]));
+                    rows.len() - 1
+                }
+            };
+            let row = &mut rows[at];
+            for c in &set.cases {
+                let a = product.match_scans(&c.reference, &c.current, c.guess);
+                let b = to_lines.match_scans(&c.reference, &c.current, c.guess);
+                if set.name.contains("edmonton") {
+                    assert_eq!(a, b, "seed {seed}: Edmonton keeps the product form");
+                }
+                for (k, r) in [a, b].iter().enumerate() {
+                    let off = c.truth.relative(&r.pose);
+                    let within = off.x.hypot(off.y) <= set.tolerance_m
+                        && off.theta.abs() <= set.tolerance_rad;
+                    row.1[k] += usize::from(within);
+                    row.2[k].push(r.iterations);
+                }
+            }
+        }
+    }
+    assert_eq!(rows.len(), 6, "every row of the table");
+    for (name, right, searches) in &mut rows {
+        let [a, b] = searches.each_mut().map(|v| {
+            v.sort_unstable();
+            v[v.len() / 2]
+        });
+        println!("{name}: right {right:?}, median searches {a} -> {b}");
+        assert!(right[1] + 1 >= right[0], "{name}: right {right:?}");
+        if !name.contains("edmonton") {
+            assert!(b < a, "{name}: {a} -> {b} searches");
+        }
+        if name.starts_with("synthetic, 0") || name.contains("belgioioso") {
+            assert!(4 * b <= 3 * a, "{name}: {a} -> {b} searches");
+        }
+    }
+}
+
+/// A pair of the goto-lab study (`tests/data/pair-restart-slides.json`: a 0.6 m advance past
+/// black and glass, where the current scan sees a table 0.3 m away that the reference saw
+/// through): no start near the guess is trusted, and point-to-line residuals let a restart
+/// 8–16° or 15 cm away slide to a look-alike place 9 cm and 2.8° off that fits 75 % of the
+/// points and passed the trust rule, so the map builder drifted 62 cm over the run. Restarts
+/// and the coarse search keep the product form: the answer is not trusted, as before, and the
+/// map builder places that scan by odometry.
+#[test]
+fn a_restart_is_not_free_to_slide() {
+    use robot::localization::{Lorentz, MatchResult};
+    let text = std::fs::read_to_string(repo().join("tests/data/pair-restart-slides.json")).unwrap();
+    let pair: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let scan = |k: &str| -> RangeScan { serde_json::from_value(pair[k].clone()).unwrap() };
+    let pose = |k: &str| {
+        let v: Vec<f64> = serde_json::from_value(pair[k].clone()).unwrap();
+        Pose2::new(v[0], v[1], v[2])
+    };
+    let (reference, current, guess, truth) =
+        (scan("ref"), scan("cur"), pose("guess"), pose("truth"));
+    let off = |r: &MatchResult| {
+        let d = truth.relative(&r.pose);
+        (d.x.hypot(d.y), d.theta.abs().to_degrees())
+    };
+    let answer = Lorentz::with_lines().match_scans(&reference, &current, guess);
+    let (metres, degrees) = off(&answer);
+    assert!(
+        !answer.converged || (metres < 0.05 && degrees < 1.0),
+        "trusted {:.0} mm and {degrees:.1}° off",
+        metres * 1e3
+    );
+    // Without point-to-line residuals anywhere, the same: the restarts find nothing trusted.
+    let product = Lorentz {
+        line_residuals_spread: None,
+        ..Lorentz::with_lines()
+    };
+    let before = product.match_scans(&reference, &current, guess);
+    assert!(!before.converged);
+    assert_eq!(answer.converged, before.converged);
 }

@@ -58,14 +58,28 @@ impl Line {
     /// The orthogonal projection of `p` on the line (E.31–E.32), held within the segment plus
     /// `margin`.
     pub fn project(&self, p: [f64; 2], margin: f64) -> [f64; 2] {
-        let t = (p[0] - self.centroid[0]) * self.direction[0]
+        self.projection(p, margin).0
+    }
+
+    /// [`Line::project`], and whether the projection fell inside the extended segment (not
+    /// moved to one of its ends).
+    pub fn projection(&self, p: [f64; 2], margin: f64) -> ([f64; 2], bool) {
+        let along = (p[0] - self.centroid[0]) * self.direction[0]
             + (p[1] - self.centroid[1]) * self.direction[1];
         // max/min rather than clamp: never a panic, whatever the numbers.
-        let t = t.max(self.extent[0] - margin).min(self.extent[1] + margin);
-        [
+        let t = along
+            .max(self.extent[0] - margin)
+            .min(self.extent[1] + margin);
+        let point = [
             self.centroid[0] + t * self.direction[0],
             self.centroid[1] + t * self.direction[1],
-        ]
+        ];
+        (point, t == along)
+    }
+
+    /// The line's unit normal (its direction turned a quarter left).
+    pub fn normal(&self) -> [f64; 2] {
+        [-self.direction[1], self.direction[0]]
     }
 }
 

@@ -34,7 +34,9 @@ pub use grid::{Cell, GridBuilder, GridConfig, OccupancyGrid};
 pub use icp::LeastSquares;
 pub use kdtree::{KdTree, LastNearest};
 pub use level::{LEVEL_TOLERANCE_RAD, LevelLocaliser};
-pub use lorentz::{COARSE, DENSE_SIGMAS, Lorentz, THESIS_SIGMAS, WIDE_SIGMAS, beam_step};
+pub use lorentz::{
+    COARSE, DENSE_SIGMAS, LINE_RESIDUALS_SPREAD, Lorentz, THESIS_SIGMAS, WIDE_SIGMAS, beam_step,
+};
 pub use map::{MapBuilder, MapConfig, MatchStats, Placed};
 pub use matcher::{
     Convergence, MAX_COORDINATE_M, MatchResult, MatcherKind, Reference, ScanMatcher,
