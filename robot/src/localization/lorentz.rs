@@ -297,21 +297,7 @@ impl Lorentz {
             let ry = s * p[0] + c * p[1];
             let ex = rx + phi[1] - q[0];
             let ey = ry + phi[2] - q[1];
-            let (dx, dy) = (two_s2 + ex * ex, two_s2 + ey * ey);
-            // ρ'(e) = 2e / D, ρ''(e) = 2 (2σ² − e²) / D².
-            let (wx1, wy1) = (2.0 * ex / dx, 2.0 * ey / dy);
-            let (wx2, wy2) = (
-                2.0 * (two_s2 - ex * ex) / (dx * dx),
-                2.0 * (two_s2 - ey * ey) / (dy * dy),
-            );
-            g[0] += -wx1 * ry + wy1 * rx;
-            g[1] += wx1;
-            g[2] += wy1;
-            h[0][0] += wx2 * ry * ry - wx1 * rx + wy2 * rx * rx - wy1 * ry;
-            h[0][1] += -wx2 * ry;
-            h[0][2] += wy2 * rx;
-            h[1][1] += wx2;
-            h[2][2] += wy2;
+            add_product_pair((&mut g, &mut h), [rx, ry], [ex, ey], two_s2);
         }
         h[1][0] = h[0][1];
         h[2][0] = h[0][2];
@@ -381,22 +367,7 @@ impl Lorentz {
                     }
                     h[0][0] -= w1 * (n[0] * rx + n[1] * ry);
                 }
-                None => {
-                    let (dx, dy) = (two_s2 + ex * ex, two_s2 + ey * ey);
-                    let (wx1, wy1) = (2.0 * ex / dx, 2.0 * ey / dy);
-                    let (wx2, wy2) = (
-                        2.0 * (two_s2 - ex * ex) / (dx * dx),
-                        2.0 * (two_s2 - ey * ey) / (dy * dy),
-                    );
-                    g[0] += -wx1 * ry + wy1 * rx;
-                    g[1] += wx1;
-                    g[2] += wy1;
-                    h[0][0] += wx2 * ry * ry - wx1 * rx + wy2 * rx * rx - wy1 * ry;
-                    h[0][1] += -wx2 * ry;
-                    h[0][2] += wy2 * rx;
-                    h[1][1] += wx2;
-                    h[2][2] += wy2;
-                }
+                None => add_product_pair((&mut g, &mut h), [rx, ry], [ex, ey], two_s2),
             }
         }
         h[1][0] = h[0][1];
@@ -463,6 +434,32 @@ struct Assist {
     lines: Vec<Option<Line>>,
     margin: f64,
     spread: Option<f64>,
+}
+
+/// Adds one pair's terms of the product form's gradient and Hessian (upper triangle and
+/// diagonal): the current point rotated, `r`, and its residual `e`.
+#[inline(always)]
+fn add_product_pair(
+    (g, h): (&mut [f64; 3], &mut [[f64; 3]; 3]),
+    [rx, ry]: [f64; 2],
+    [ex, ey]: [f64; 2],
+    two_s2: f64,
+) {
+    let (dx, dy) = (two_s2 + ex * ex, two_s2 + ey * ey);
+    // ρ'(e) = 2e / D, ρ''(e) = 2 (2σ² − e²) / D².
+    let (wx1, wy1) = (2.0 * ex / dx, 2.0 * ey / dy);
+    let (wx2, wy2) = (
+        2.0 * (two_s2 - ex * ex) / (dx * dx),
+        2.0 * (two_s2 - ey * ey) / (dy * dy),
+    );
+    g[0] += -wx1 * ry + wy1 * rx;
+    g[1] += wx1;
+    g[2] += wy1;
+    h[0][0] += wx2 * ry * ry - wx1 * rx + wy2 * rx * rx - wy1 * ry;
+    h[0][1] += -wx2 * ry;
+    h[0][2] += wy2 * rx;
+    h[1][1] += wx2;
+    h[2][2] += wy2;
 }
 
 /// Pairs of points: the current ones (in their own frame) and their targets in the
