@@ -536,7 +536,7 @@ impl ScanMatcher for Lorentz {
             margin: params.end_margin_m,
             spread: self.line_residuals_spread.filter(|_| dense),
         });
-        let sigmas = self.schedule(current);
+        let sigmas = self.schedule_for(dense);
         let mut first = self.passes(sigmas, reference, current, lines.as_ref(), guess);
         if self.restarts.is_empty() && self.wide_sigmas_m.is_empty() {
             return first;
@@ -621,7 +621,12 @@ impl Lorentz {
     /// The σ schedule for `current`: `dense_sigmas_m` when it has one and the scan's beams lie
     /// closer than `dense_below_rad`, else `sigmas_m`.
     pub fn schedule(&self, current: &ScanPoints) -> &[f64] {
-        if self.is_dense(current) {
+        self.schedule_for(self.is_dense(current))
+    }
+
+    /// The σ schedule for a scan that is `dense` ([`Lorentz::is_dense`]) or not.
+    fn schedule_for(&self, dense: bool) -> &[f64] {
+        if dense {
             &self.dense_sigmas_m
         } else {
             &self.sigmas_m
