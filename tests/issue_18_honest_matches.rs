@@ -8,6 +8,7 @@ use robot::localization::{
 };
 use robot::{Pose2, Stamp};
 use sim::commands::matchers::{self, CaseSet, Row};
+use std::collections::BTreeMap;
 use std::process::Command;
 
 /// The standard sets, small: every row of the README's table, `n` pairs each, seed `seed`.
@@ -262,11 +263,23 @@ fn right_answers(set: &CaseSet, matcher: &robot::localization::Lorentz) -> usize
     set.cases
         .iter()
         .filter(|c| {
-            let r = matcher.match_scans(&c.reference, &c.current, c.guess);
-            let off = c.truth.relative(&r.pose);
-            off.x.hypot(off.y) <= set.tolerance_m && off.theta.abs() <= set.tolerance_rad
+            is_right(
+                set,
+                c,
+                &matcher.match_scans(&c.reference, &c.current, c.guess),
+            )
         })
         .count()
+}
+
+/// Whether `result` answers `case` of `set` within the set's tolerance.
+fn is_right(
+    set: &CaseSet,
+    case: &matchers::Case,
+    result: &robot::localization::MatchResult,
+) -> bool {
+    let off = case.truth.relative(&result.pose);
+    off.x.hypot(off.y) <= set.tolerance_m && off.theta.abs() <= set.tolerance_rad
 }
 
 /// From a guess 20 cm and 10° off, a line-assisted Lorentzian that is not trusted starts again
@@ -627,17 +640,10 @@ fn point_to_line_residuals_take_fewer_searches() {
     };
     let to_lines = Lorentz::with_lines();
     // Per row: right answers and correspondence searches, the product form's and the new.
-    let mut rows: Vec<(String, [usize; 2], [Vec<u32>; 2])> = Vec::new();
+    let mut rows: BTreeMap<String, ([usize; 2], [Vec<u32>; 2])> = BTreeMap::new();
     for seed in [13, 14] {
         for set in sets(150, seed) {
-            let at = match rows.iter().position(|r| r.0 == set.name) {
-                Some(at) => at,
-                None => {
-                    rows.push((set.name.clone(), [0, 0], [Vec::new(), Vec::new()]));
-                    rows.len() - 1
-                }
-            };
-            let row = &mut rows[at];
+            let (right, searches) = rows.entry(set.name.clone()).or_default();
             for c in &set.cases {
                 let a = product.match_scans(&c.reference, &c.current, c.guess);
                 let b = to_lines.match_scans(&c.reference, &c.current, c.guess);
@@ -645,17 +651,14 @@ fn point_to_line_residuals_take_fewer_searches() {
                     assert_eq!(a, b, "seed {seed}: Edmonton keeps the product form");
                 }
                 for (k, r) in [a, b].iter().enumerate() {
-                    let off = c.truth.relative(&r.pose);
-                    let within = off.x.hypot(off.y) <= set.tolerance_m
-                        && off.theta.abs() <= set.tolerance_rad;
-                    row.1[k] += usize::from(within);
-                    row.2[k].push(r.iterations);
+                    right[k] += usize::from(is_right(&set, c, r));
+                    searches[k].push(r.iterations);
                 }
             }
         }
     }
     assert_eq!(rows.len(), 6, "every row of the table");
-    for (name, right, searches) in &mut rows {
+    for (name, (right, searches)) in &mut rows {
         let [a, b] = searches.each_mut().map(|v| {
             v.sort_unstable();
             v[v.len() / 2]
