@@ -501,6 +501,11 @@ impl FanCast {
         (0..self.len()).map(|k| self.dir(k)).collect()
     }
 
+    /// Where the rays start.
+    pub fn origin(&self) -> [f64; 3] {
+        self.origin
+    }
+
     /// Ray `k`'s direction, read from the columns the sweep keeps (a copy of a three-element
     /// row through memory can cost more than the arithmetic on it).
     #[inline]

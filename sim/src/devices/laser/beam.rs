@@ -20,7 +20,7 @@
 
 use crate::config::{Material, Optics};
 use crate::rng::SimRng;
-use crate::world::{Beyond, Hit, Surface, WorldMap};
+use crate::world::{Beyond, FanCast, Hit, Surface, WorldMap};
 use parry2d::math::{Pose, Vector};
 use parry2d::query::{Ray, RayCast};
 use parry2d::shape::Ball;
@@ -104,9 +104,10 @@ struct Contact {
 }
 
 /// What the second legs of one scan's beams share: the face the last one met, where the next
-/// one's search stops at the latest ([`WorldMap::cast_near`]), and for each face a first leg
-/// ended on, the faces the legs leaving it can meet ([`WorldMap::faces_beyond`]). Start a new
-/// one for each scan: it holds only for beams from one origin.
+/// one's search stops at the latest ([`WorldMap::cast_near`]), and for each face first legs
+/// ended on, the faces the legs leaving it can meet ([`WorldMap::faces_beyond`]), listed
+/// once a second leg leaves it. Start a new one for each scan: it holds only for beams from
+/// one origin.
 #[derive(Clone, Debug, Default)]
 pub struct Legs {
     hint: Option<usize>,
@@ -123,15 +124,25 @@ impl Legs {
     }
 }
 
-/// The faces the legs leaving a face can meet: `faces[from..to]` of [`Legs`], or `None` when
-/// no cone holds them (the laser on the face's line).
+/// The legs leaving one face of a scan: how they are cast.
 #[derive(Copy, Clone, Debug)]
 struct Cone {
     /// The face left and whether through it.
     key: (u32, bool),
-    /// The laser's origin, or its image behind the face, in the plan.
-    apex: [f64; 2],
-    faces: Option<(u32, u32)>,
+    listing: Listing,
+}
+
+/// How the legs leaving a face are cast.
+#[derive(Copy, Clone, Debug)]
+enum Listing {
+    /// One has left it, down the walk of the plan's grid: a third of the faces a scan's
+    /// legs leave serve one leg only, for which listing the cone's faces costs three walks.
+    Once,
+    /// Among `faces[from..to]` of [`Legs`], from `apex`: the laser's origin, or its image
+    /// behind the face, in the plan.
+    Among { apex: [f64; 2], from: u32, to: u32 },
+    /// Down the walk: no cone holds them (the laser on the face's line, or too many faces).
+    Walk,
 }
 
 /// Follows one pulse from `origin` along the unit direction `dir`.
@@ -244,6 +255,23 @@ impl<'a> Pulses<'a> {
             Some(contact) => self.first_contact(origin, dir, contact, legs, rng),
             None => Echo::Lost,
         }
+    }
+
+    /// [`Pulses::trace_near`] for beam `k` of a scan's sweep `fan`, a call apart from the
+    /// loop over the beams (those [`Pulses::off_face`] does not answer): it takes and gives
+    /// back the generator by value, so the loop's own stays in registers, and its rarer work
+    /// does not crowd the loop.
+    #[inline(never)]
+    pub fn beam_apart(
+        &self,
+        fan: &FanCast,
+        k: usize,
+        legs: &mut Legs,
+        mut rng: SimRng,
+    ) -> (Echo, SimRng) {
+        let hit = fan.hit(self.map, k);
+        let echo = self.trace_near(fan.origin(), fan.dir(k), hit.as_ref(), legs, &mut rng);
+        (echo, rng)
     }
 
     /// Whether [`Pulses::off_face`] may answer a beam: no other robot to meet, a range to
@@ -368,35 +396,39 @@ impl<'a> Pulses<'a> {
             return self.map.cast_down_tree(origin, dir, max);
         }
         let key = (left as u32, through);
-        let found = legs.cones.iter().find(|c| c.key == key).copied();
-        let cone = match found {
-            Some(cone) => cone,
-            None => {
-                // The origin itself through a pane, its image behind a mirror.
-                let mut from = [apex[0], apex[1]];
-                if !through {
-                    let face = &self.map.faces()[left];
-                    let n = self.map.face_normal(left);
-                    let off = (from[0] - face.a[0]) * n[0] + (from[1] - face.a[1]) * n[1];
-                    from = [from[0] - 2.0 * off * n[0], from[1] - 2.0 * off * n[1]];
-                }
-                let start = legs.faces.len();
-                let listed = self.map.faces_beyond(from, left, &mut legs.faces);
-                let cone = Cone {
-                    key,
-                    apex: from,
-                    faces: listed.then_some((start as u32, legs.faces.len() as u32)),
-                };
-                legs.cones.push(cone);
-                cone
-            }
+        let Some(k) = legs.cones.iter().position(|c| c.key == key) else {
+            legs.cones.push(Cone {
+                key,
+                listing: Listing::Once,
+            });
+            return self.map.cast_near(origin, dir, max, legs.hint);
         };
-        match cone.faces {
-            Some((from, to)) => {
-                let faces = &legs.faces[from as usize..to as usize];
-                self.map.cast_among(origin, dir, max, cone.apex, faces)
+        if let Listing::Once = legs.cones[k].listing {
+            // The origin itself through a pane, its image behind a mirror.
+            let mut from = [apex[0], apex[1]];
+            if !through {
+                let face = &self.map.faces()[left];
+                let n = self.map.face_normal(left);
+                let off = (from[0] - face.a[0]) * n[0] + (from[1] - face.a[1]) * n[1];
+                from = [from[0] - 2.0 * off * n[0], from[1] - 2.0 * off * n[1]];
             }
-            None => self.map.cast_near(origin, dir, max, legs.hint),
+            let start = legs.faces.len();
+            legs.cones[k].listing = if self.map.faces_beyond(from, left, &mut legs.faces) {
+                Listing::Among {
+                    apex: from,
+                    from: start as u32,
+                    to: legs.faces.len() as u32,
+                }
+            } else {
+                Listing::Walk
+            };
+        }
+        match legs.cones[k].listing {
+            Listing::Among { apex, from, to } => {
+                let faces = &legs.faces[from as usize..to as usize];
+                self.map.cast_among(origin, dir, max, apex, faces)
+            }
+            Listing::Once | Listing::Walk => self.map.cast_near(origin, dir, max, legs.hint),
         }
     }
 

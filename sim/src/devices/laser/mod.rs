@@ -279,16 +279,15 @@ impl LaserModel {
         }
         // The sweep's buffers are kept from one scan to the next, one set per thread.
         thread_local! {
-            static FAN: core::cell::RefCell<(FanCast, Legs)> =
-                core::cell::RefCell::new(Default::default());
+            static FAN: core::cell::RefCell<Buffers> = core::cell::RefCell::new(Default::default());
         }
-        let (ranges_mm, local) = FAN.with_borrow_mut(|(fan, legs)| {
+        let (ranges_mm, local) = FAN.with_borrow_mut(|buffers| {
             #[cfg(target_arch = "x86_64")]
             if self.casting == Casting::Sweep && crate::wide::avx2() {
                 // SAFETY: the processor runs AVX2, checked just above.
-                return unsafe { self.sweep_scan_avx2(map, pulses, frame, fan, legs, rng) };
+                return unsafe { self.sweep_scan_avx2(map, pulses, frame, buffers, rng) };
             }
-            self.sweep_scan(map, pulses, frame, fan, legs, rng)
+            self.sweep_scan(map, pulses, frame, buffers, rng)
         });
         *rng = local;
         self.telegram(stamp, ranges_mm)
@@ -302,11 +301,10 @@ impl LaserModel {
         map: &WorldMap,
         pulses: beam::Pulses<'_>,
         frame: LaserFrame,
-        fan: &mut FanCast,
-        legs: &mut Legs,
+        buffers: &mut Buffers,
         rng: &SimRng,
     ) -> (Vec<u16>, SimRng) {
-        self.sweep_scan(map, pulses, frame, fan, legs, rng)
+        self.sweep_scan(map, pulses, frame, buffers, rng)
     }
 
     /// The readings of a scan from `frame`, its beams' first legs cast in one sweep, and the
@@ -317,8 +315,7 @@ impl LaserModel {
         map: &WorldMap,
         pulses: beam::Pulses<'_>,
         frame: LaserFrame,
-        fan: &mut FanCast,
-        legs: &mut Legs,
+        Buffers { fan, legs }: &mut Buffers,
         rng: &SimRng,
     ) -> (Vec<u16>, SimRng) {
         map.cast_plane_fan(
@@ -344,13 +341,15 @@ impl LaserModel {
             .zip(&mut ranges_mm)
             .enumerate()
         {
-            let dir = [x, y, z];
-            // A level beam's first face is read off the sweep's columns; any other beam's
-            // first surface is built (the same echo, the same draws).
+            // A level beam's first face is read off the sweep's columns; any other beam is
+            // followed from its first surface, built, in a call apart (the same echo, the
+            // same draws).
             let echo = if plain && z == 0.0 && face != u32::MAX {
-                pulses.off_face(frame.origin, dir, (t, face as usize), legs, rng)
+                pulses.off_face(frame.origin, [x, y, z], (t, face as usize), legs, rng)
             } else {
-                pulses.trace_near(frame.origin, dir, fan.hit(map, k).as_ref(), legs, rng)
+                let (echo, after) = pulses.beam_apart(fan, k, legs, rng.clone());
+                *rng = after;
+                echo
             };
             *reading = self.reading_mm(echo, rng);
         }
@@ -397,6 +396,14 @@ impl LaserModel {
             }
         }
     }
+}
+
+/// What a scan's sweep keeps from one scan to the next, one set per thread: the fan and the
+/// legs' cones.
+#[derive(Default)]
+struct Buffers {
+    fan: FanCast,
+    legs: Legs,
 }
 
 /// An LMS at 0.3 m, 361 beams over 180°, 38400 bps, for tests.
