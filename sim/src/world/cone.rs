@@ -103,6 +103,10 @@ impl WorldMap {
     /// A face's crossing is at least its gap to the apex less the origin's distance from the
     /// apex away (the triangle inequality), so the faces past the nearest crossing so far are
     /// not tried.
+    ///
+    /// Inlined into its caller: its hit, returned through memory from a call, was read back
+    /// before the stores writing it had landed (a store-forwarding stall a leg).
+    #[inline(always)]
     pub fn cast_among(
         &self,
         origin: [f64; 3],

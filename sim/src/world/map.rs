@@ -329,10 +329,23 @@ impl WorldMap {
         max: f64,
         hint: Option<usize>,
     ) -> Option<Hit> {
+        self.fan_hit(origin, dir, max, self.nearest_near(origin, dir, max, hint))
+    }
+
+    /// [`WorldMap::cast_near`]'s nearest vertical face and its distance (`u32::MAX` for
+    /// none), small enough to come back from a call in registers: a caller building the hit
+    /// itself does not read it back through memory before the call's stores have landed.
+    pub fn nearest_near(
+        &self,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        max: f64,
+        hint: Option<usize>,
+    ) -> (f64, u32) {
         let start = hint
             .filter(|&i| i < self.faces.len() && !is_vertical(dir))
             .and_then(|i| Some((self.face_crossing(i, origin, dir, max)?, i as u32)));
-        self.fan_hit(origin, dir, max, self.walk_faces(origin, dir, max, start))
+        self.walk_faces(origin, dir, max, start)
     }
 
     /// The nearest vertical face along the ray within `max` metres and its distance, or

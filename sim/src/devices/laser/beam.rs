@@ -401,7 +401,8 @@ impl<'a> Pulses<'a> {
                 key,
                 listing: Listing::Once,
             });
-            return self.map.cast_near(origin, dir, max, legs.hint);
+            let nearest = self.map.nearest_near(origin, dir, max, legs.hint);
+            return self.map.fan_hit(origin, dir, max, nearest);
         };
         if let Listing::Once = legs.cones[k].listing {
             // The origin itself through a pane, its image behind a mirror.
@@ -428,7 +429,10 @@ impl<'a> Pulses<'a> {
                 let faces = &legs.faces[from as usize..to as usize];
                 self.map.cast_among(origin, dir, max, apex, faces)
             }
-            Listing::Once | Listing::Walk => self.map.cast_near(origin, dir, max, legs.hint),
+            Listing::Once | Listing::Walk => {
+                let nearest = self.map.nearest_near(origin, dir, max, legs.hint);
+                self.map.fan_hit(origin, dir, max, nearest)
+            }
         }
     }
 
