@@ -136,7 +136,7 @@ struct Cone {
 #[derive(Copy, Clone, Debug)]
 enum Listing {
     /// One has left it, down the walk of the plan's grid: a third of the faces a scan's
-    /// legs leave serve one leg only, for which listing the cone's faces costs three walks.
+    /// legs leave serve one leg only, for which listing the cone's faces costs about four walks.
     Once,
     /// Among `faces[from..to]` of [`Legs`], from `apex`: the laser's origin, or its image
     /// behind the face, in the plan.
