@@ -396,35 +396,22 @@ impl<'a> Pulses<'a> {
             return self.map.cast_down_tree(origin, dir, max);
         }
         let key = (left as u32, through);
-        let Some(k) = legs.cones.iter().position(|c| c.key == key) else {
-            legs.cones.push(Cone {
-                key,
-                listing: Listing::Once,
-            });
-            let nearest = self.map.nearest_near(origin, dir, max, legs.hint);
-            return self.map.fan_hit(origin, dir, max, nearest);
-        };
-        if let Listing::Once = legs.cones[k].listing {
-            // The origin itself through a pane, its image behind a mirror.
-            let mut from = [apex[0], apex[1]];
-            if !through {
-                let face = &self.map.faces()[left];
-                let n = self.map.face_normal(left);
-                let off = (from[0] - face.a[0]) * n[0] + (from[1] - face.a[1]) * n[1];
-                from = [from[0] - 2.0 * off * n[0], from[1] - 2.0 * off * n[1]];
+        let listing = match legs.cones.iter_mut().find(|c| c.key == key) {
+            None => {
+                legs.cones.push(Cone {
+                    key,
+                    listing: Listing::Once,
+                });
+                Listing::Once
             }
-            let start = legs.faces.len();
-            legs.cones[k].listing = if self.map.faces_beyond(from, left, &mut legs.faces) {
-                Listing::Among {
-                    apex: from,
-                    from: start as u32,
-                    to: legs.faces.len() as u32,
+            Some(cone) => {
+                if let Listing::Once = cone.listing {
+                    cone.listing = self.cone_listing(apex, (left, through), &mut legs.faces);
                 }
-            } else {
-                Listing::Walk
-            };
-        }
-        match legs.cones[k].listing {
+                cone.listing
+            }
+        };
+        match listing {
             Listing::Among { apex, from, to } => {
                 let faces = &legs.faces[from as usize..to as usize];
                 self.map.cast_among(origin, dir, max, apex, faces)
@@ -433,6 +420,36 @@ impl<'a> Pulses<'a> {
                 let nearest = self.map.nearest_near(origin, dir, max, legs.hint);
                 self.map.fan_hit(origin, dir, max, nearest)
             }
+        }
+    }
+
+    /// The faces the legs leaving face `left` — reflected, or through it (`through`) — of
+    /// beams from `apex` can meet, listed at the end of `faces`. Once or twice a scan: a
+    /// call, kept out of the legs' path.
+    #[inline(never)]
+    fn cone_listing(
+        &self,
+        apex: [f64; 3],
+        (left, through): (usize, bool),
+        faces: &mut Vec<Beyond>,
+    ) -> Listing {
+        // The origin itself through a pane, its image behind a mirror.
+        let mut from = [apex[0], apex[1]];
+        if !through {
+            let face = &self.map.faces()[left];
+            let n = self.map.face_normal(left);
+            let off = (from[0] - face.a[0]) * n[0] + (from[1] - face.a[1]) * n[1];
+            from = [from[0] - 2.0 * off * n[0], from[1] - 2.0 * off * n[1]];
+        }
+        let start = faces.len();
+        if self.map.faces_beyond(from, left, faces) {
+            Listing::Among {
+                apex: from,
+                from: start as u32,
+                to: faces.len() as u32,
+            }
+        } else {
+            Listing::Walk
         }
     }
 
