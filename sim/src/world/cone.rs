@@ -94,29 +94,29 @@ impl WorldMap {
         true
     }
 
-    /// What a ray from `origin` along the unit direction `dir` meets first within `max`
-    /// metres, exactly [`WorldMap::cast`]'s answer, when the ray runs within 10 µm of a ray
-    /// from `apex` through face `m` and `faces` are what [`WorldMap::faces_beyond`] listed for
-    /// `apex` and `m`: a leg that left face `m` (reflected, `apex` the laser's image; through
-    /// it, the laser) from just in front of it.
+    /// The nearest vertical face a ray from `origin` along the unit direction `dir` meets
+    /// within `max` metres and its distance (`u32::MAX` for none) — the face
+    /// [`WorldMap::cast`] builds its hit from, exactly — when the ray runs within 10 µm of a
+    /// ray from `apex` through face `m` and `faces` are what [`WorldMap::faces_beyond`] listed
+    /// for `apex` and `m`: a leg that left face `m` (reflected, `apex` the laser's image;
+    /// through it, the laser) from just in front of it.
     ///
     /// A face's crossing is at least its gap to the apex less the origin's distance from the
     /// apex away (the triangle inequality), so the faces past the nearest crossing so far are
     /// not tried.
     ///
-    /// Inlined into its caller: its hit, returned through memory from a call, was read back
-    /// before the stores writing it had landed (a store-forwarding stall a leg).
+    /// Inlined into its caller, which builds the hit.
     #[inline(always)]
-    pub fn cast_among(
+    pub fn nearest_among(
         &self,
         origin: [f64; 3],
         dir: [f64; 3],
         max: f64,
         apex: [f64; 2],
         faces: &[Beyond],
-    ) -> Option<Hit> {
+    ) -> (f64, u32) {
         if is_vertical(dir) {
-            return self.cast(origin, dir, max);
+            return self.cast_faces(origin, dir, max);
         }
         let w = [origin[0] - apex[0], origin[1] - apex[1]];
         let start = (w[0] * w[0] + w[1] * w[1]).sqrt();
@@ -143,7 +143,20 @@ impl WorldMap {
                 best = (t, i);
             }
         }
-        self.fan_hit(origin, dir, max, best)
+        best
+    }
+
+    /// [`WorldMap::nearest_among`]'s hit: what [`WorldMap::cast`] answers.
+    pub fn cast_among(
+        &self,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        max: f64,
+        apex: [f64; 2],
+        faces: &[Beyond],
+    ) -> Option<Hit> {
+        let nearest = self.nearest_among(origin, dir, max, apex, faces);
+        self.fan_hit(origin, dir, max, nearest)
     }
 }
 

@@ -310,12 +310,13 @@ impl WorldMap {
     /// [`WorldMap::cast`] down the world's tree of faces' boxes: the reference the walk and the
     /// sweep are tested and benchmarked against.
     pub fn cast_down_tree(&self, origin: [f64; 3], dir: [f64; 3], max: f64) -> Option<Hit> {
-        self.fan_hit(
-            origin,
-            dir,
-            max,
-            self.cast_faces_from(origin, dir, max, None),
-        )
+        self.fan_hit(origin, dir, max, self.nearest_down_tree(origin, dir, max))
+    }
+
+    /// [`WorldMap::cast_down_tree`]'s nearest vertical face and its distance (`u32::MAX` for
+    /// none), from which it builds its hit.
+    pub fn nearest_down_tree(&self, origin: [f64; 3], dir: [f64; 3], max: f64) -> (f64, u32) {
+        self.cast_faces_from(origin, dir, max, None)
     }
 
     /// [`WorldMap::cast`] told the face the ray is likely to meet first (`hint`: the face a

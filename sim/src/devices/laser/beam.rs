@@ -382,18 +382,36 @@ impl<'a> Pulses<'a> {
         }
     }
 
-    /// What a second leg from `origin` along `dir` meets first within `max`, having left face
-    /// `left` of the first surface — reflected, or through it (`through`) — of a beam from
-    /// `apex`: among the faces the legs leaving that face can meet ([`Legs`]).
-    fn cast_second(
+    /// [`Pulses::cast`]'s nearest vertical face and its distance (`u32::MAX` for none): what
+    /// [`WorldMap::fan_hit`] builds the hit from.
+    #[inline]
+    fn nearest(
+        &self,
+        origin: [f64; 3],
+        dir: [f64; 3],
+        max: f64,
+        hint: Option<usize>,
+    ) -> (f64, u32) {
+        if self.down_tree {
+            self.map.nearest_down_tree(origin, dir, max)
+        } else {
+            self.map.nearest_near(origin, dir, max, hint)
+        }
+    }
+
+    /// The nearest vertical face a second leg from `origin` along `dir` meets within `max`
+    /// and its distance (`u32::MAX` for none), having left face `left` of the first surface
+    /// — reflected, or through it (`through`) — of a beam from `apex`: among the faces the
+    /// legs leaving that face can meet ([`Legs`]).
+    fn nearest_second(
         &self,
         (origin, dir, max): ([f64; 3], [f64; 3], f64),
         apex: [f64; 3],
         (left, through): (usize, bool),
         legs: &mut Legs,
-    ) -> Option<Hit> {
+    ) -> (f64, u32) {
         if self.down_tree {
-            return self.map.cast_down_tree(origin, dir, max);
+            return self.map.nearest_down_tree(origin, dir, max);
         }
         let key = (left as u32, through);
         let listing = match legs.cones.iter_mut().find(|c| c.key == key) {
@@ -414,12 +432,9 @@ impl<'a> Pulses<'a> {
         match listing {
             Listing::Among { apex, from, to } => {
                 let faces = &legs.faces[from as usize..to as usize];
-                self.map.cast_among(origin, dir, max, apex, faces)
+                self.map.nearest_among(origin, dir, max, apex, faces)
             }
-            Listing::Once | Listing::Walk => {
-                let nearest = self.map.nearest_near(origin, dir, max, legs.hint);
-                self.map.fan_hit(origin, dir, max, nearest)
-            }
+            Listing::Once | Listing::Walk => self.map.nearest_near(origin, dir, max, legs.hint),
         }
     }
 
@@ -480,22 +495,24 @@ impl<'a> Pulses<'a> {
             return Echo::Lost;
         }
         let (o, d) = (pulse.o, pulse.d);
-        let wall = match first.face {
+        // Every way the leg is cast gives the nearest face as a pair in registers, and the hit
+        // is built in one place: a hit written to memory on one path and read back whole after
+        // the paths join stalled the load on the stores.
+        let nearest = match first.face {
             Some(i) => {
                 let through = fate == Fate::Through;
-                let wall = self.cast_second((o, d, remaining), origin, (i, through), legs);
-                if let Some(Hit {
-                    surface: Surface::Face(i),
-                    ..
-                }) = wall
-                {
-                    legs.hint = Some(i);
+                let nearest = self.nearest_second((o, d, remaining), origin, (i, through), legs);
+                if nearest.1 != u32::MAX {
+                    legs.hint = Some(nearest.1 as usize);
                 }
-                wall
+                nearest
             }
-            None => self.cast(o, d, remaining, legs.hint),
+            None => self.nearest(o, d, remaining, legs.hint),
         };
-        let wall = wall.map(Contact::from);
+        let wall = self
+            .map
+            .fan_hit(o, d, remaining, nearest)
+            .map(Contact::from);
         let Some(contact) = nearer_disc(wall, self.body.iter().chain(self.others), o, d, remaining)
         else {
             return Echo::Lost;
