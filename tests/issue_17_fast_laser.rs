@@ -150,6 +150,7 @@ fn whole_scans_equal_the_reference_reading_for_reading() {
             );
             let reference = model.clone().with_casting(Casting::PerBeam);
             let baseline = model.clone().with_casting(Casting::SweepBaseline);
+            let avx2 = model.clone().with_casting(Casting::SweepAvx2);
             for k in 0..40u64 {
                 let frame = random_frame(&world, &mut rng);
                 // The robot's own body, which reflected beams can meet.
@@ -162,6 +163,7 @@ fn whole_scans_equal_the_reference_reading_for_reading() {
                 let mut a = sim::rng::substream(seed, k);
                 let mut b = sim::rng::substream(seed, k);
                 let mut c = sim::rng::substream(seed, k);
+                let mut d = sim::rng::substream(seed, k);
                 // Other robots around, which every leg meets too.
                 let others: Vec<Disc> = (0..rng.random_range(0..4))
                     .map(|_| Disc {
@@ -175,17 +177,19 @@ fn whole_scans_equal_the_reference_reading_for_reading() {
                     .collect();
                 let fast = model.scan_among(&map, body, &others, frame, Stamp(k), &mut a);
                 let reference = reference.scan_among(&map, body, &others, frame, Stamp(k), &mut b);
-                // The sweep as compiled for this processor (AVX2 where it has it) and for the
-                // baseline one.
+                // The sweep as compiled for this processor (AVX-512 or AVX2 where it has them),
+                // for AVX2 and for the baseline one.
                 let base = baseline.scan_among(&map, body, &others, frame, Stamp(k), &mut c);
+                let four = avx2.scan_among(&map, body, &others, frame, Stamp(k), &mut d);
                 assert_eq!(fast, reference, "{name}, {outliers}, {frame:?}");
                 assert_eq!(
                     base, reference,
                     "baseline build: {name}, {outliers}, {frame:?}"
                 );
-                let draws = [a.random::<u64>(), b.random::<u64>(), c.random::<u64>()];
+                assert_eq!(four, reference, "AVX2 build: {name}, {outliers}, {frame:?}");
+                let draws = [a, b, c, d].map(|mut r| r.random::<u64>());
                 assert!(
-                    draws[0] == draws[1] && draws[1] == draws[2],
+                    draws.iter().all(|&x| x == draws[0]),
                     "the same draws were made"
                 );
                 compared += 1;

@@ -11,9 +11,9 @@
 //!   specular loss and multi-bounce paths; the reference is the same ring with every ray cast on
 //!   its own to its end.
 //!
-//! The sweep is also measured as compiled for the baseline x86-64 processor
-//! (`Casting::SweepBaseline`): the default picks an AVX2 build where the processor has one
-//! (`sim/src/wide.rs`), with the same readings.
+//! The sweep is also measured as compiled for AVX2 (`Casting::SweepAvx2`) and for the baseline
+//! x86-64 processor (`Casting::SweepBaseline`): the default picks an AVX-512 build where the
+//! processor has one, else an AVX2 one (`sim/src/wide.rs`), with the same readings.
 //!
 //! Beside them, the sweep's geometry alone (`cast_plane_fan` and each beam's first surface, no
 //! optics, no noise): the ray-casting limit a whole scan is measured against.
@@ -77,9 +77,19 @@ fn main() {
     let pioneer = RobotDescription::load(root().join("scenarios/robots/pioneer-3dx.toml")).unwrap();
     let lab_text = std::fs::read_to_string(root().join("worlds/lab.toml")).unwrap();
     println!(
-        "| world | scan | first surfaces only, scans/s | sweep, scans/s | sweep, baseline build, scans/s | reference, scans/s | speed-up | speed-up, baseline build |"
+        "The sweep's default build on this processor: {}.\n",
+        if sim::wide::avx512() {
+            "AVX-512"
+        } else if sim::wide::avx2() {
+            "AVX2"
+        } else {
+            "baseline"
+        }
     );
-    println!("|---|---|---|---|---|---|---|---|");
+    println!(
+        "| world | scan | first surfaces only, scans/s | sweep, scans/s | sweep, AVX2 build, scans/s | sweep, baseline build, scans/s | reference, scans/s | speed-up | speed-up, baseline build |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
     let cluttered = sim::world::clutter::lab_with_boxes(&lab_text, 72);
     let worlds = [
         (
@@ -176,16 +186,27 @@ fn main() {
                 },
                 |_| {},
             );
+            let wide = model.clone().with_casting(Casting::SweepAvx2);
+            let mut rng4 = sim::rng::stream(1, "bench");
+            let (avx2, _) = best_of(
+                2000,
+                |k| {
+                    let f = frames[k % frames.len()];
+                    black_box(wide.scan(&map, None, f, Stamp(k as u64), &mut rng4));
+                },
+                |_| {},
+            );
             let what = if tilt_deg == 0.0 {
                 format!("level, outliers {outliers}")
             } else {
                 format!("tilted {tilt_deg}°, outliers {outliers}")
             };
             println!(
-                "| {name} ({} faces) | {what} | {:.0} | {:.0} | {:.0} | {:.0} | {:.2} | {:.2} |",
+                "| {name} ({} faces) | {what} | {:.0} | {:.0} | {:.0} | {:.0} | {:.0} | {:.2} | {:.2} |",
                 map.faces().len(),
                 1.0 / geometry,
                 1.0 / sweep,
+                1.0 / avx2,
                 1.0 / baseline,
                 1.0 / reference,
                 reference / sweep,

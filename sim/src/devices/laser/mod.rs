@@ -132,8 +132,10 @@ impl LaserFrame {
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 pub enum Casting {
     /// The beams' first legs in one sweep of the world's faces (the default), compiled for
-    /// AVX2 where the processor has it ([`crate::wide`]).
+    /// the widest registers the processor has: AVX-512, else AVX2 ([`crate::wide`]).
     Sweep,
+    /// The same sweep compiled for AVX2 where the processor has it, even if it has AVX-512.
+    SweepAvx2,
     /// The same sweep compiled for the baseline processor whatever this one has: to check
     /// that both builds read the same.
     SweepBaseline,
@@ -283,14 +285,35 @@ impl LaserModel {
         }
         let (ranges_mm, local) = FAN.with_borrow_mut(|buffers| {
             #[cfg(target_arch = "x86_64")]
-            if self.casting == Casting::Sweep && crate::wide::avx2() {
-                // SAFETY: the processor runs AVX2, checked just above.
-                return unsafe { self.sweep_scan_avx2(map, pulses, frame, buffers, rng) };
+            match self.casting {
+                Casting::Sweep if crate::wide::avx512() => {
+                    // SAFETY: the processor runs AVX-512 (F, VL, DQ, BW), checked just above.
+                    return unsafe { self.sweep_scan_avx512(map, pulses, frame, buffers, rng) };
+                }
+                Casting::Sweep | Casting::SweepAvx2 if crate::wide::avx2() => {
+                    // SAFETY: the processor runs AVX2, checked just above.
+                    return unsafe { self.sweep_scan_avx2(map, pulses, frame, buffers, rng) };
+                }
+                _ => {}
             }
             self.sweep_scan(map, pulses, frame, buffers, rng)
         });
         *rng = local;
         self.telegram(stamp, ranges_mm)
+    }
+
+    /// [`LaserModel::sweep_scan`] compiled for AVX-512 ([`crate::wide`]): the same bits.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw")]
+    fn sweep_scan_avx512(
+        &self,
+        map: &WorldMap,
+        pulses: beam::Pulses<'_>,
+        frame: LaserFrame,
+        buffers: &mut Buffers,
+        rng: &SimRng,
+    ) -> (Vec<u16>, SimRng) {
+        self.sweep_scan(map, pulses, frame, buffers, rng)
     }
 
     /// [`LaserModel::sweep_scan`] compiled for AVX2 ([`crate::wide`]): the same bits.
