@@ -396,7 +396,13 @@ struct ScanPoints {
 fn classify_points(record: &RunRecord, map: &WorldMap) -> ScanPoints {
     let total: usize = record.scans.iter().map(|r| r.scan.len()).sum();
     let stride = total.div_ceil(MAX_POINTS).max(1);
-    let mut out = ScanPoints::default();
+    // Room for every point from the start: growing the columns copied them over and over.
+    let most = total / stride + 1;
+    let mut out = ScanPoints {
+        seen: Vec::with_capacity(most),
+        drifted: Vec::with_capacity(most),
+        ..ScanPoints::default()
+    };
     let mut skip = stride;
     let mut kinds = crate::world::PointKinds::new(map);
     // Each beam's sine and cosine, computed again only for a scan of other angles.
