@@ -175,27 +175,23 @@ fn main() {
                     black_box(reference.scan(&map, None, f, Stamp(k as u64), &mut rng2));
                 },
             );
-            // The same sweep compiled for the baseline x86-64 processor (no AVX2).
-            let baseline = model.clone().with_casting(Casting::SweepBaseline);
-            let mut rng3 = sim::rng::stream(1, "bench");
-            let (baseline, _) = best_of(
-                2000,
-                |k| {
-                    let f = frames[k % frames.len()];
-                    black_box(baseline.scan(&map, None, f, Stamp(k as u64), &mut rng3));
-                },
-                |_| {},
-            );
-            let wide = model.clone().with_casting(Casting::SweepAvx2);
-            let mut rng4 = sim::rng::stream(1, "bench");
-            let (avx2, _) = best_of(
-                2000,
-                |k| {
-                    let f = frames[k % frames.len()];
-                    black_box(wide.scan(&map, None, f, Stamp(k as u64), &mut rng4));
-                },
-                |_| {},
-            );
+            // The same sweep compiled for the baseline x86-64 processor (no AVX2) and for AVX2
+            // (where the default is an AVX-512 build).
+            let other_build = |casting: Casting| {
+                let built = model.clone().with_casting(casting);
+                let mut rng = sim::rng::stream(1, "bench");
+                best_of(
+                    2000,
+                    |k| {
+                        let f = frames[k % frames.len()];
+                        black_box(built.scan(&map, None, f, Stamp(k as u64), &mut rng));
+                    },
+                    |_| {},
+                )
+                .0
+            };
+            let baseline = other_build(Casting::SweepBaseline);
+            let avx2 = other_build(Casting::SweepAvx2);
             let what = if tilt_deg == 0.0 {
                 format!("level, outliers {outliers}")
             } else {

@@ -375,15 +375,13 @@ impl<'a> Pulses<'a> {
     /// What a leg from `origin` along `dir` meets first within `max`.
     #[inline]
     fn cast(&self, origin: [f64; 3], dir: [f64; 3], max: f64, hint: Option<usize>) -> Option<Hit> {
-        if self.down_tree {
-            self.map.cast_down_tree(origin, dir, max)
-        } else {
-            self.map.cast_near(origin, dir, max, hint)
-        }
+        let nearest = self.nearest(origin, dir, max, hint);
+        self.map.fan_hit(origin, dir, max, nearest)
     }
 
-    /// [`Pulses::cast`]'s nearest vertical face and its distance (`u32::MAX` for none): what
-    /// [`WorldMap::fan_hit`] builds the hit from.
+    /// [`Pulses::cast`]'s nearest vertical face and its distance (`u32::MAX` for none): down
+    /// the tree for the reference, else by the walk; what [`WorldMap::fan_hit`] builds the hit
+    /// from.
     #[inline]
     fn nearest(
         &self,
