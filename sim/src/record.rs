@@ -93,8 +93,9 @@ pub struct RunRecord {
 /// What a run built from its scans while it went on (`crate::output::ScanStream`).
 #[derive(Clone, Debug)]
 pub struct Streamed {
-    /// The occupancy grid of the level scans (`None`: nothing to draw).
-    pub grid: Option<robot::localization::OccupancyGrid>,
+    /// The occupancy grid of the level scans, as built: the grid's file thread trims it
+    /// ([`robot::localization::GridBuilder::grid`]; `None` there: nothing to draw).
+    pub grid: robot::localization::GridBuilder,
     /// The bytes of `scans.jsonl`.
     pub scan_lines: Vec<u8>,
     /// Each exchange of the tape as JSON, in the tape's order (`run.mcap`'s `/hardware/tape`).

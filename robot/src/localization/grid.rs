@@ -182,19 +182,24 @@ impl GridBuilder {
     /// The grid of the scans inserted, trimmed to the cells a beam reached with a margin of ten
     /// cells; `None` when none was inserted or the map would hold more than 10⁸ cells.
     pub fn finish(self) -> Option<OccupancyGrid> {
+        self.grid()
+    }
+
+    /// The grid of the scans inserted so far, as [`GridBuilder::finish`] gives it (the builder
+    /// goes on).
+    pub fn grid(&self) -> Option<OccupancyGrid> {
         if self.inserted == 0 || self.too_large {
             return None;
         }
         let r = self.config.resolution_m;
-        let mut grid = OccupancyGrid {
+        let storage = OccupancyGrid {
             config: self.config,
             origin: [self.lo[0] as f64 * r, self.lo[1] as f64 * r],
             width: self.width,
             height: self.height,
-            log_odds: self.log_odds,
+            log_odds: Vec::new(),
         };
-        grid.trim();
-        Some(grid)
+        Some(storage.trimmed(&self.log_odds))
     }
 
     /// Grows the storage to hold the lattice cells `lo..=hi`; false when it would hold more than
@@ -339,15 +344,26 @@ impl OccupancyGrid {
     }
 
     /// Drops the rows and columns no beam reached, keeping a margin of ten cells.
+    #[cfg(test)]
     fn trim(&mut self) {
+        let log_odds = std::mem::take(&mut self.log_odds);
+        *self = self.trimmed(&log_odds);
+    }
+
+    /// The grid of `log_odds` (this grid's size, its own cells left aside) without the rows and
+    /// columns no beam reached, keeping a margin of ten cells: copied once.
+    fn trimmed(&self, log_odds: &[f32]) -> OccupancyGrid {
         // The bounds of the cells seen, looking only where they could still widen: the rows
         // from each end to the first seen, then in each row between only the cells left of the
         // leftmost and right of the rightmost seen so far (the grid grows with slack, and most
         // of it is never seen).
         let seen = |v: &f32| *v != 0.0;
-        let row = |y: usize| &self.log_odds[y * self.width..(y + 1) * self.width];
+        let row = |y: usize| &log_odds[y * self.width..(y + 1) * self.width];
         let Some(y0) = (0..self.height).find(|&y| row(y).iter().any(seen)) else {
-            return;
+            return OccupancyGrid {
+                log_odds: log_odds.to_vec(),
+                ..self.clone()
+            };
         };
         let y1 = (y0..self.height)
             .rev()
@@ -372,16 +388,19 @@ impl OccupancyGrid {
         let width = x1 - x0 + 1;
         let mut cells = Vec::with_capacity(width * (y1 - y0 + 1));
         for y in y0..=y1 {
-            cells.extend_from_slice(&self.log_odds[y * self.width + x0..=y * self.width + x1]);
+            cells.extend_from_slice(&log_odds[y * self.width + x0..=y * self.width + x1]);
         }
         let r = self.config.resolution_m;
-        self.origin = [
-            self.origin[0] + x0 as f64 * r,
-            self.origin[1] + y0 as f64 * r,
-        ];
-        self.width = width;
-        self.height = y1 - y0 + 1;
-        self.log_odds = cells;
+        OccupancyGrid {
+            config: self.config,
+            origin: [
+                self.origin[0] + x0 as f64 * r,
+                self.origin[1] + y0 as f64 * r,
+            ],
+            width,
+            height: y1 - y0 + 1,
+            log_odds: cells,
+        }
     }
 
     /// Cells across (x) and up (y).

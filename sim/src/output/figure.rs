@@ -55,6 +55,7 @@ impl Layers {
         if body.trim().is_empty() {
             return;
         }
+        self.body.reserve(body.len() + key.len() + 24);
         let _ = writeln!(self.body, r#"<g data-layer="{key}">{body}</g>"#);
         if !self.legend.iter().any(|e| e.key == key) {
             self.legend.push(Entry {

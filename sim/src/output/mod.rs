@@ -216,7 +216,7 @@ pub fn write_all(record: &RunRecord, scenario: &Scenario, dir: &Path) -> std::io
                 .map(|_| vec![path("run.mcap")])
         });
         let grid = s.spawn(|| match &record.streamed {
-            Some(built) => grid::write_grid_files(dir, built.grid.as_ref()),
+            Some(built) => grid::write_grid_files(dir, built.grid.grid().as_ref()),
             None => write_grid(
                 dir,
                 level_scans(record, scenario).iter().map(|(p, s)| (*p, s)),

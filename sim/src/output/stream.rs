@@ -103,7 +103,7 @@ impl ScanStream {
                 }
             }
             Streamed {
-                grid: grid.finish(),
+                grid,
                 scan_lines,
                 tape_json,
             }

@@ -5,9 +5,11 @@ pub(super) use super::figure::xml_escape;
 use super::figure::{Layers, Plan, Swatch, open_svg};
 use super::summary::estimate_errors;
 use crate::config::{Material, WorldDescription};
+use crate::devices::laser::LaserFrame;
 use crate::record::RunRecord;
-use crate::world::{PointKind, WorldMap};
+use crate::world::{PointKind, PointKinds, WorldMap};
 use robot::Pose2;
+use robot::hardware::LaserScan;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -122,7 +124,6 @@ fn render(record: &RunRecord, world: &WorldDescription, map: &WorldMap) -> Strin
         origin: [PAD + Plan::LEFT, PAD + Plan::ABOVE],
         scale: SCALE,
     };
-    let points = classify_points(record, map);
     let mut layers = Layers::default();
     layers.plain(&plan.grid());
     draw_walls(&mut layers, &plan, world, 5.0);
@@ -130,73 +131,28 @@ fn render(record: &RunRecord, world: &WorldDescription, map: &WorldMap) -> Strin
     // Scans drawn from the true pose (what is there, with the laser's noise) and from odometry.
     // A point where there is no surface — a mirror image off glass or metal, or an outlier — is
     // a ghost, drawn apart; so are the floor hits of a tilted laser.
+    let mut scans = ScanDots::new(&plan);
+    draw_scan_points(record, map, &mut scans);
+    let mut estimated = Dots::new(&plan);
+    if let Some(loc) = &record.localisation {
+        let stride = loc.map.len().div_ceil(MAX_POINTS).max(1);
+        for p in loc.map.iter().step_by(stride) {
+            estimated.add(p[0], p[1]);
+        }
+    }
     let mut beyond = String::new();
     let mut beyond_count = 0usize;
-    let mut dots = |points: &mut dyn Iterator<Item = [f64; 3]>| {
-        // Points on a half-pixel grid, each drawn once: a 2-pixel dot hides any finer place, and
-        // a picture of a long run then costs what its area does, not what its scans do.
-        let mut d = String::new();
-        let mut drawn = HalfPixels::new(&plan);
-        for p in points {
-            if plan.contains(p[0], p[1]) {
-                // In the frame: both half-pixel numbers are positive, so adding a half and
-                // truncating rounds.
-                let (x, y) = (
-                    (plan.x(p[0]) * 2.0 + 0.5) as i64,
-                    (plan.y(p[1]) * 2.0 + 0.5) as i64,
-                );
-                if drawn.insert(x, y) {
-                    d.push('M');
-                    push_halves(&mut d, x);
-                    d.push(' ');
-                    push_halves(&mut d, y);
-                    d.push_str("h0");
-                }
-            } else {
-                beyond_count += 1;
-                let (x, y) = plan.clamped(p[0], p[1]);
-                beyond.push('M');
-                push_tenths(&mut beyond, x);
-                beyond.push(' ');
-                push_tenths(&mut beyond, y);
-                beyond.push_str("h0");
-            }
-        }
-        if d.is_empty() {
-            d
-        } else {
-            format!(
-                r#"<path d="{d}" stroke="currentColor" stroke-width="2" stroke-linecap="round" fill="none"/>"#
-            )
-        }
+    let mut coloured = |colour: &str, dots: Dots| {
+        let (body, out, count) = dots.finish(colour);
+        beyond.push_str(&out);
+        beyond_count += count;
+        body
     };
-    let coloured = |colour: &str, body: String| {
-        if body.is_empty() {
-            body
-        } else {
-            format!(r#"<g color="{colour}">{body}</g>"#)
-        }
-    };
-    let drifted = coloured(DRIFTED, dots(&mut points.drifted.iter().copied()));
-    let seen = coloured(
-        point_colour(PointKind::Surface),
-        dots(&mut points.seen.iter().copied()),
-    );
-    let floor = coloured(
-        point_colour(PointKind::Floor),
-        dots(&mut points.floor.iter().copied()),
-    );
-    let ghosts = coloured(
-        point_colour(PointKind::Ghost),
-        dots(&mut points.ghosts.iter().copied()),
-    );
-    let estimated = record.localisation.as_ref().map_or(String::new(), |loc| {
-        let stride = loc.map.len().div_ceil(MAX_POINTS).max(1);
-        coloured(
-            ESTIMATE_SCANS,
-            dots(&mut loc.map.iter().step_by(stride).map(|p| [p[0], p[1], 0.0])),
-        )
-    });
+    let drifted = coloured(DRIFTED, scans.drifted);
+    let seen = coloured(point_colour(PointKind::Surface), scans.seen);
+    let floor = coloured(point_colour(PointKind::Floor), scans.floor);
+    let ghosts = coloured(point_colour(PointKind::Ghost), scans.ghosts);
+    let estimated = coloured(ESTIMATE_SCANS, estimated);
     layers.add(
         "scans-odometry",
         "scans placed at odometry",
@@ -345,6 +301,7 @@ fn render(record: &RunRecord, world: &WorldDescription, map: &WorldMap) -> Strin
     let bar_y = figures_y + 18.0 * figures_lines as f64 + 8.0;
     let height = bar_y + 12.0;
     let mut s = open_svg(width, height, 13);
+    s.reserve(layers.body().len() + 4096 * (1 + layers.rows(columns)));
     s.push_str(layers.body());
     s.push_str(&layers.legend(PAD, legend_top, columns, column));
     let _ = writeln!(
@@ -378,56 +335,140 @@ fn render(record: &RunRecord, world: &WorldDescription, map: &WorldMap) -> Strin
     s
 }
 
-/// The scans' points in the world, sorted by what they hit.
-#[derive(Default)]
-struct ScanPoints {
+/// The scans' points being drawn, sorted by what they hit.
+struct ScanDots {
     /// Placed at the true pose, on a surface.
-    seen: Vec<[f64; 3]>,
+    seen: Dots,
     /// Placed at the true pose, on the floor.
-    floor: Vec<[f64; 3]>,
+    floor: Dots,
     /// Placed at the true pose, far from every surface.
-    ghosts: Vec<[f64; 3]>,
+    ghosts: Dots,
     /// Placed at the odometry pose.
-    drifted: Vec<[f64; 3]>,
+    drifted: Dots,
 }
 
-/// Every returned beam of the run (thinned to [`MAX_POINTS`]) as world points, from the laser's
-/// true 3D frame and from where odometry puts it.
-fn classify_points(record: &RunRecord, map: &WorldMap) -> ScanPoints {
+impl ScanDots {
+    fn new(plan: &Plan) -> Self {
+        ScanDots {
+            seen: Dots::new(plan),
+            floor: Dots::new(plan),
+            ghosts: Dots::new(plan),
+            drifted: Dots::new(plan),
+        }
+    }
+}
+
+/// A layer of dots being drawn, point by point, as they come: each on a half-pixel grid and
+/// drawn once (a 2-pixel dot hides any finer place, and a picture of a long run then costs what
+/// its area does, not what its scans do); a point beyond the frame marked at its edge.
+struct Dots {
+    plan: Plan,
+    /// The path data.
+    d: String,
+    drawn: HalfPixels,
+    /// The marks of the points beyond the frame, and their number.
+    beyond: (String, usize),
+}
+
+impl Dots {
+    fn new(plan: &Plan) -> Self {
+        Dots {
+            plan: *plan,
+            d: String::new(),
+            drawn: HalfPixels::new(plan),
+            beyond: (String::new(), 0),
+        }
+    }
+
+    /// Draws the point at `(x, y)` metres.
+    fn add(&mut self, x: f64, y: f64) {
+        let plan = &self.plan;
+        if plan.contains(x, y) {
+            // In the frame: both half-pixel numbers are positive, so adding a half and
+            // truncating rounds.
+            let (x, y) = (
+                (plan.x(x) * 2.0 + 0.5) as i64,
+                (plan.y(y) * 2.0 + 0.5) as i64,
+            );
+            if self.drawn.insert(x, y) {
+                push_dot(&mut self.d, x, y);
+            }
+        } else {
+            let (x, y) = plan.clamped(x, y);
+            let beyond = &mut self.beyond.0;
+            beyond.push('M');
+            push_tenths(beyond, x);
+            beyond.push(' ');
+            push_tenths(beyond, y);
+            beyond.push_str("h0");
+            self.beyond.1 += 1;
+        }
+    }
+
+    /// The layer in `colour` (nothing when no point fell in the frame), the marks of the
+    /// points beyond it, and their number.
+    fn finish(self, colour: &str) -> (String, String, usize) {
+        let mut body = String::new();
+        if !self.d.is_empty() {
+            // Pieces pushed into room made once: the path data is the picture's bulk.
+            let (open, close) = (
+                format!(r#"<g color="{colour}"><path d=""#),
+                r#"" stroke="currentColor" stroke-width="2" stroke-linecap="round" fill="none"/></g>"#,
+            );
+            body.reserve_exact(open.len() + self.d.len() + close.len());
+            body.push_str(&open);
+            body.push_str(&self.d);
+            body.push_str(close);
+        }
+        (body, self.beyond.0, self.beyond.1)
+    }
+}
+
+/// Each beam's sine and cosine, computed again only for a scan of other angles.
+#[derive(Default)]
+struct BeamTrig {
+    angles: Option<(f64, f64)>,
+    trig: Vec<(f64, f64)>,
+}
+
+impl BeamTrig {
+    fn of(&mut self, scan: &LaserScan) -> &[(f64, f64)] {
+        let angles = (scan.angle_min, scan.angle_increment);
+        if self.angles != Some(angles) || scan.len() != self.trig.len() {
+            self.angles = Some(angles);
+            self.trig = (0..scan.len()).map(|i| scan.angle(i).sin_cos()).collect();
+        }
+        &self.trig
+    }
+}
+
+/// The world point `range` metres along the beam of sine and cosine `(sa, ca)` from `frame`,
+/// whose axes are `(forward, left)`: sums and products.
+#[inline]
+fn beam_point(
+    frame: &LaserFrame,
+    (forward, left): ([f64; 3], [f64; 3]),
+    (sa, ca): (f64, f64),
+    range: f64,
+) -> [f64; 3] {
+    [0, 1, 2].map(|j| frame.origin[j] + range * (ca * forward[j] + sa * left[j]))
+}
+
+/// Draws every returned beam of the run (thinned to [`MAX_POINTS`]), from the laser's true 3D
+/// frame and from where odometry puts it, each as it is placed.
+fn draw_scan_points(record: &RunRecord, map: &WorldMap, out: &mut ScanDots) {
     let total: usize = record.scans.iter().map(|r| r.scan.len()).sum();
     let stride = total.div_ceil(MAX_POINTS).max(1);
-    // Room for every point from the start: growing the columns copied them over and over.
-    let most = total / stride + 1;
-    let mut out = ScanPoints {
-        seen: Vec::with_capacity(most),
-        drifted: Vec::with_capacity(most),
-        ..ScanPoints::default()
-    };
     let mut skip = stride;
-    let mut kinds = crate::world::PointKinds::new(map);
-    // Each beam's sine and cosine, computed again only for a scan of other angles.
-    let mut beams: ((f64, f64), Vec<(f64, f64)>) = ((f64::NAN, f64::NAN), Vec::new());
+    let mut kinds = PointKinds::new(map);
+    let mut trig = BeamTrig::default();
     for r in &record.scans {
-        let angles = (r.scan.angle_min, r.scan.angle_increment);
-        if angles != beams.0 || r.scan.len() != beams.1.len() {
-            beams = (
-                angles,
-                (0..r.scan.len())
-                    .map(|i| r.scan.angle(i).sin_cos())
-                    .collect(),
-            );
-        }
+        let trig = trig.of(&r.scan);
         let at_odometry = r.frame.carried(r.truth, r.odometry);
         // Each frame's axes once a scan, each beam's angle once: a point is then sums and
         // products.
-        let point = |frame: &crate::devices::laser::LaserFrame,
-                     (forward, left): ([f64; 3], [f64; 3]),
-                     (sa, ca): (f64, f64),
-                     range: f64| {
-            [0, 1, 2].map(|j| frame.origin[j] + range * (ca * forward[j] + sa * left[j]))
-        };
         let (axes, odometry_axes) = (r.frame.axes(), at_odometry.axes());
-        for i in 0..r.scan.len() {
+        for (i, &beam) in trig.iter().enumerate() {
             let Some(range) = r.scan.range_m(i) else {
                 continue;
             };
@@ -437,19 +478,17 @@ fn classify_points(record: &RunRecord, map: &WorldMap) -> ScanPoints {
                 continue;
             }
             skip = stride;
-            let trig = beams.1[i];
-            let p = point(&r.frame, axes, trig, range);
+            let p = beam_point(&r.frame, axes, beam, range);
             let target = match kinds.of(p) {
                 PointKind::Ghost => &mut out.ghosts,
                 PointKind::Floor => &mut out.floor,
                 PointKind::Surface => &mut out.seen,
             };
-            target.push(p);
-            out.drifted
-                .push(point(&at_odometry, odometry_axes, trig, range));
+            target.add(p[0], p[1]);
+            let q = beam_point(&at_odometry, odometry_axes, beam, range);
+            out.drifted.add(q[0], q[1]);
         }
     }
-    out
 }
 
 /// Which half-pixel places of a plan's frame were drawn.
@@ -497,15 +536,41 @@ fn push_whole(s: &mut String, n: u64) {
     s.push_str(itoa::Buffer::new().format(n));
 }
 
-/// Writes `halves / 2` with one decimal only when it is not whole ("12", "12.5").
-fn push_halves(s: &mut String, halves: i64) {
+/// Writes the path data of a dot at half-pixels `(x, y)`: `M{x} {y}h0`, each number written by
+/// [`write_halves`]. Built in one buffer and copied once (a picture draws tens of thousands).
+fn push_dot(s: &mut String, x: i64, y: i64) {
+    // 'M', two numbers of at most 20 digits, a sign and ".5" each, a space and "h0".
+    let mut buf = [0u8; 56];
+    buf[0] = b'M';
+    let mut n = 1 + write_halves(&mut buf[1..], x);
+    buf[n] = b' ';
+    n += 1;
+    n += write_halves(&mut buf[n..], y);
+    buf[n..n + 2].copy_from_slice(b"h0");
+    n += 2;
+    s.push_str(std::str::from_utf8(&buf[..n]).expect("ASCII digits"));
+}
+
+/// Writes `halves / 2` into `buf` with one decimal only when it is not whole ("12", "12.5");
+/// the bytes written.
+fn write_halves(buf: &mut [u8], halves: i64) -> usize {
+    let mut n = 0;
     if halves < 0 {
-        s.push('-');
+        buf[0] = b'-';
+        n = 1;
     }
-    push_whole(s, halves.unsigned_abs() / 2);
+    let mut w = halves.unsigned_abs() / 2;
+    let whole = w.checked_ilog10().map_or(1, |l| l as usize + 1);
+    for k in (0..whole).rev() {
+        buf[n + k] = b'0' + (w % 10) as u8;
+        w /= 10;
+    }
+    n += whole;
     if halves % 2 != 0 {
-        s.push_str(".5");
+        buf[n..n + 2].copy_from_slice(b".5");
+        n += 2;
     }
+    n
 }
 
 /// Writes `x` as `format!("{x:.1}")` does, byte for byte, without the general float formatter
@@ -640,8 +705,12 @@ mod tests {
             vec![0, 1, -1, 2, -2, 9, 10, 19, 20, 99, 100, i64::MAX, i64::MIN];
         values.extend((0..100_000).map(|_| rng.random::<i64>() >> rng.random_range(0..63)));
         for h in values {
-            let mut s = String::new();
-            push_halves(&mut s, h);
+            let halves = |h: i64| {
+                let mut buf = [0u8; 24];
+                let n = write_halves(&mut buf, h);
+                String::from_utf8(buf[..n].to_vec()).unwrap()
+            };
+            let s = halves(h);
             let whole = format!("{}{}", if h < 0 { "-" } else { "" }, h.unsigned_abs() / 2);
             let want = if h % 2 != 0 {
                 format!("{whole}.5")
@@ -649,6 +718,10 @@ mod tests {
                 whole
             };
             assert_eq!(s, want, "{h}");
+            let mut dot = String::new();
+            push_dot(&mut dot, h, -h / 3);
+            let y = halves(-h / 3);
+            assert_eq!(dot, format!("M{s} {y}h0"), "{h}");
             let mut n = String::new();
             push_whole(&mut n, h.unsigned_abs());
             assert_eq!(n, h.unsigned_abs().to_string());
