@@ -199,6 +199,26 @@ fn whole_scans_equal_the_reference_reading_for_reading() {
     assert!(compared >= 7 * 3 * 40);
 }
 
+/// The default casts each beam on its own, as the reference does, only in a world whose fans
+/// would go down the tree ray by ray anyway: many faces thinly spread over a mostly empty grid
+/// (the lab traced from its map). The hand-written worlds keep the sweep, and the lab with
+/// hundreds of boxes, past the sweep's limit, keeps walking its grid. Its readings are the
+/// reference's either way (the whole-scan test above, over every bundled world).
+#[test]
+fn fans_are_cast_together_only_where_that_does_less_work() {
+    let folder = crate::common::repo().join("worlds");
+    let load = |file: &str| WorldMap::new(&WorldDescription::load(folder.join(file)).unwrap());
+    for file in ["lab.toml", "glass-door.toml", "lab-stage.toml"] {
+        assert!(load(file).casts_fans(), "{file}");
+    }
+    let traced = load("lab-from-map.toml");
+    assert!(traced.faces().len() > FAN_MAX_FACES && !traced.casts_fans());
+    let lab = std::fs::read_to_string(folder.join("lab.toml")).unwrap();
+    let boxes = sim::world::clutter::lab_with_boxes(&lab, 792);
+    let boxes = WorldMap::new(&WorldDescription::parse(&boxes, "lab-792-boxes.toml").unwrap());
+    assert!(boxes.faces().len() > FAN_MAX_FACES && boxes.casts_fans());
+}
+
 #[test]
 fn beams_through_the_ends_of_faces_match_too() {
     // Each beam aimed exactly at a corner of the lab (up to rounding): the sweep's angular

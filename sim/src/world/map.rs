@@ -272,6 +272,15 @@ impl WorldMap {
         &self.faces
     }
 
+    /// Whether the rays of a fan from one origin ([`WorldMap::cast_plane_fan`]) are cast by
+    /// more than each going down the tree: by the sweep (at most [`super::FAN_MAX_FACES`]
+    /// faces) or by walking the plan's grid. Where neither serves (many faces spread thinly
+    /// over a grid of mostly empty cells), a fan casts each ray down the tree as a single ray
+    /// would, and its bookkeeping only adds to that.
+    pub fn casts_fans(&self) -> bool {
+        self.faces.len() <= super::FAN_MAX_FACES || self.walk.is_some()
+    }
+
     /// Face `i`'s unit normal in the plan, on one side or the other: [`Hit::normal`] is this
     /// or its opposite, whichever faces the ray.
     #[inline]

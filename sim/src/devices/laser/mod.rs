@@ -132,7 +132,9 @@ impl LaserFrame {
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 pub enum Casting {
     /// The beams' first legs in one sweep of the world's faces (the default), compiled for
-    /// the widest registers the processor has: AVX-512, else AVX2 ([`crate::wide`]).
+    /// the widest registers the processor has: AVX-512, else AVX2 ([`crate::wide`]); each beam
+    /// on its own down the tree, as [`Casting::PerBeam`], in a world no fan is swept or walked
+    /// in ([`WorldMap::casts_fans`]).
     Sweep,
     /// The same sweep compiled for AVX2 where the processor has it, even if it has AVX-512.
     SweepAvx2,
@@ -267,7 +269,14 @@ impl LaserModel {
         rng: &mut SimRng,
     ) -> LaserScan {
         let pulses = beam::Pulses::new(map, body, self.range_max_m).among(others);
-        if self.casting == Casting::PerBeam {
+        // The default takes the reference's way in a world whose fans are cast ray by ray down
+        // the tree anyway: the same readings (tested), without the sweep's bookkeeping.
+        let per_beam = match self.casting {
+            Casting::PerBeam => true,
+            Casting::Sweep => !map.casts_fans(),
+            Casting::SweepAvx2 | Casting::SweepBaseline => false,
+        };
+        if per_beam {
             let pulses = pulses.down_tree();
             let ranges_mm = self
                 .directions(frame)
