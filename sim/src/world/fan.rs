@@ -158,7 +158,7 @@ impl WorldMap {
         hits: &mut Vec<Option<Hit>>,
     ) {
         hits.clear();
-        let prepared = if self.faces().len() <= FAN_MAX_FACES {
+        let prepared = if self.sweeps_fans() {
             turns(dirs)
         } else {
             None
@@ -228,11 +228,8 @@ impl WorldMap {
         let f = [forward[0], forward[1]];
         let f2 = f[0] * f[0] + f[1] * f[1];
         let square = (f[0] * left[0] + f[1] * left[1]).abs() <= 1e-12 && left[2] == 0.0;
-        let (Some(turns), true, true) = (
-            &fan.turns,
-            square && f2 > 1e-12,
-            self.faces().len() <= FAN_MAX_FACES,
-        ) else {
+        let (Some(turns), true, true) = (&fan.turns, square && f2 > 1e-12, self.sweeps_fans())
+        else {
             out.nearest.reset(0);
             for k in 0..out.len() {
                 let (t, i) = self.cast_faces(origin, out.dir(k), max);

@@ -278,7 +278,15 @@ impl WorldMap {
     /// over a grid of mostly empty cells), a fan casts each ray down the tree as a single ray
     /// would, and its bookkeeping only adds to that.
     pub fn casts_fans(&self) -> bool {
-        self.faces.len() <= super::FAN_MAX_FACES || self.walk.is_some()
+        self.sweeps_fans() || self.walk.is_some()
+    }
+
+    /// Whether a fan's rays are cast in one sweep of the faces: at most
+    /// [`super::FAN_MAX_FACES`] of them (the rule [`WorldMap::cast_plane_fan`] and
+    /// [`WorldMap::cast_fan`] follow).
+    #[inline]
+    pub(super) fn sweeps_fans(&self) -> bool {
+        self.faces.len() <= super::FAN_MAX_FACES
     }
 
     /// Face `i`'s unit normal in the plan, on one side or the other: [`Hit::normal`] is this
