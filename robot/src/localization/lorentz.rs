@@ -35,6 +35,12 @@ pub struct Lorentz {
     pub energy_tolerance: f64,
     /// Accepted NLM steps allowed per minimisation. Default 30.
     pub max_steps: u32,
+    /// Accepted NLM steps allowed per minimisation in the first match from the guess (and a
+    /// loose answer's second match, [`Lorentz::first_spread`]), instead of `max_steps`; the
+    /// wide schedule, the restarts and the coarse search's starts keep `max_steps`. Not in the
+    /// thesis; `None` (the default) leaves `max_steps` everywhere, and
+    /// [`Lorentz::with_lines`] has [`FIRST_STEPS`].
+    pub first_max_steps: Option<u32>,
     /// When a σ pass stops: a search that moves the estimate by under 0.01 mm and 0.0001°, or
     /// 30 searches.
     pub convergence: Convergence,
@@ -163,6 +169,21 @@ pub const LINE_RESIDUALS_SPREAD: f64 = 0.5;
 /// the spread (a share of 0) took fewer searches still on Freiburg 101 (27), but let pure
 /// corridors slide: 002's L-corridor 7 cm, a synthetic pair started at the truth 13 cm.
 pub const FIRST_SPREAD: f64 = 0.1;
+
+/// The NLM steps [`Lorentz::with_lines`] takes on each search's pairs in its first match from
+/// the guess ([`Lorentz::first_max_steps`]): one. The thesis minimises each search's pairs to
+/// the end (up to 30 accepted steps) before it searches again; but the pairs change at the next
+/// search, and a full minimisation on pairs found from a pose some centimetres off carries the
+/// estimate as far as they lead, wrong ones included. One damped Newton step a search (λ from
+/// 0.001, raised tenfold until the error falls) ends where a search no longer moves the
+/// estimate in about as many searches, each a fraction of the cost. Over seeds 1–20 of `twin
+/// matchers` (6,000 pairs a row, Freiburg 101 5,820), against 30: right answers 5996 → 5995
+/// (synthetic, 0 %), 5985 → 5982 (20 %), 5998 → 5999 (Belgioioso), 5714 → 5717 (Freiburg 101),
+/// 5645 → 5677 (Edmonton) and 5577 → 5595 (large guesses). The fallbacks keep 30: with one
+/// step there too, a restart 15 cm from the guess slid 55 cm down the lab in a closed-loop
+/// `goto-lab` run (seed 2027, trial 73) and the map builder trusted it; two steps a search did
+/// no better than 30 on Edmonton, four little better.
+pub const FIRST_STEPS: u32 = 1;
 
 /// How many fewer of the current points (as a share) the answer matched again with
 /// [`LINE_RESIDUALS_SPREAD`] may fit than a loose first answer and still be kept
@@ -294,6 +315,7 @@ impl Lorentz {
             dense_below_rad: 0.75f64.to_radians(),
             line_residuals_spread: Some(LINE_RESIDUALS_SPREAD),
             first_spread: Some(FIRST_SPREAD),
+            first_max_steps: Some(FIRST_STEPS),
             ..Lorentz::default()
         }
     }
@@ -424,7 +446,7 @@ impl Lorentz {
         pairs: Pairs<'_>,
         normals: Option<&[Normal]>,
         mut phi: [f64; 3],
-        sigma: f64,
+        (sigma, steps): (f64, u32),
     ) -> [f64; 3] {
         let two_s2 = 2.0 * sigma * sigma;
         let energy = |phi| match normals {
@@ -434,7 +456,7 @@ impl Lorentz {
         let tolerance = self.energy_tolerance * pairs.0.len() as f64;
         let mut e = energy(phi);
         let mut lambda = self.lambda0;
-        for _ in 0..self.max_steps {
+        for _ in 0..steps {
             let (g, h) = match normals {
                 Some(normals) => Self::derivatives_to_lines(pairs, normals, phi, two_s2),
                 None => Self::derivatives(pairs.0, pairs.1, phi, two_s2),
@@ -553,6 +575,7 @@ impl Default for Lorentz {
             dense_below_rad: 0.0,
             line_residuals_spread: None,
             first_spread: None,
+            first_max_steps: None,
         }
     }
 }
@@ -581,7 +604,14 @@ impl ScanMatcher for Lorentz {
             spread: first_spread.or(spread),
         });
         let sigmas = self.schedule_for(dense);
-        let mut first = self.passes(sigmas, reference, current, lines.as_ref(), guess);
+        let first_steps = self.first_max_steps.unwrap_or(self.max_steps);
+        let mut first = self.passes(
+            (sigmas, first_steps),
+            reference,
+            current,
+            lines.as_ref(),
+            guess,
+        );
         let more = !self.restarts.is_empty() || !self.wide_sigmas_m.is_empty();
         if !more && first_spread.is_none() {
             return first;
@@ -599,7 +629,7 @@ impl ScanMatcher for Lorentz {
             assist.spread = spread;
         }
         if first_spread.is_some() && first.quality.inlier_share < self.wide_below {
-            let again = self.judged(sigmas, (reference, current), &lines, guess);
+            let again = self.judged((sigmas, first_steps), (reference, current), &lines, guess);
             let iterations = first.iterations + again.iterations;
             if rule.trusts(&again.quality)
                 && again.quality.inlier_share + FIRST_SPREAD_MARGIN >= first.quality.inlier_share
@@ -620,7 +650,12 @@ impl ScanMatcher for Lorentz {
         let mut best: Option<(MatchResult, f64)> = None;
         let mut iterations = first.iterations;
         if !self.wide_sigmas_m.is_empty() && (!trusted || (loose && far)) {
-            let wide = self.judged(&self.wide_sigmas_m, (reference, current), &lines, guess);
+            let wide = self.judged(
+                (&self.wide_sigmas_m, self.max_steps),
+                (reference, current),
+                &lines,
+                guess,
+            );
             iterations += wide.iterations;
             if rule.trusts(&wide.quality) {
                 let share = wide.quality.inlier_share;
@@ -660,7 +695,12 @@ impl ScanMatcher for Lorentz {
         };
         for offset in &self.restarts {
             let start = guess.compose(offset);
-            let result = self.judged(sigmas, (reference, current), &lines, start);
+            let result = self.judged(
+                (sigmas, self.max_steps),
+                (reference, current),
+                &lines,
+                start,
+            );
             keep(result, f64::NEG_INFINITY, &mut best);
         }
         // Still nothing: the coarse search's starts, whose answers must fit clearly more
@@ -671,7 +711,12 @@ impl ScanMatcher for Lorentz {
             let (from, to) = (&reference.points.xy, &current.xy);
             let floor = first.quality.inlier_share + COARSE_MARGIN;
             for start in correlative::best_starts(from, to, guess, window, (*count, 3)) {
-                let result = self.judged(sigmas, (reference, current), &lines, start);
+                let result = self.judged(
+                    (sigmas, self.max_steps),
+                    (reference, current),
+                    &lines,
+                    start,
+                );
                 keep(result, floor, &mut best);
             }
         }
@@ -707,22 +752,23 @@ impl Lorentz {
     /// [`Lorentz::passes`] from `start`, the answer judged by the trust rule.
     fn judged(
         &self,
-        sigmas: &[f64],
+        schedule: (&[f64], u32),
         (reference, current): (&Reference, &ScanPoints),
         lines: &Option<Assist>,
         start: Pose2,
     ) -> MatchResult {
-        let mut result = self.passes(sigmas, reference, current, lines.as_ref(), start);
+        let mut result = self.passes(schedule, reference, current, lines.as_ref(), start);
         if result.quality == MatchQuality::NONE {
             result.quality = TrustRule::default().assess(reference, &current.xy, &result.pose);
         }
         result
     }
 
-    /// The σ passes of `sigmas` and the polish from `guess`.
+    /// The σ passes of `sigmas`, at most `steps` NLM steps a search, and the polish from
+    /// `guess`.
     fn passes(
         &self,
-        sigmas: &[f64],
+        (sigmas, steps): (&[f64], u32),
         reference: &Reference,
         current: &ScanPoints,
         lines: Option<&Assist>,
@@ -788,7 +834,7 @@ impl Lorentz {
                     .and_then(|assist| assist.spread)
                     .is_some_and(|share| normals_spread(&normals, share));
                 let normals = to_lines.then_some(normals.as_slice());
-                phi = self.nlm((&sources, &targets), normals, phi, sigma);
+                phi = self.nlm((&sources, &targets), normals, phi, (sigma, steps));
                 let step = Pose2::new(
                     phi[1] - before[1],
                     phi[2] - before[2],

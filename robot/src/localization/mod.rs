@@ -35,8 +35,8 @@ pub use icp::LeastSquares;
 pub use kdtree::{KdTree, LastNearest};
 pub use level::{LEVEL_TOLERANCE_RAD, LevelLocaliser};
 pub use lorentz::{
-    COARSE, DENSE_SIGMAS, FIRST_SPREAD, FIRST_SPREAD_MARGIN, LINE_RESIDUALS_SPREAD, Lorentz,
-    THESIS_SIGMAS, WIDE_SIGMAS, beam_step,
+    COARSE, DENSE_SIGMAS, FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD,
+    Lorentz, THESIS_SIGMAS, WIDE_SIGMAS, beam_step,
 };
 pub use map::{MapBuilder, MapConfig, MatchStats, Placed};
 pub use matcher::{
