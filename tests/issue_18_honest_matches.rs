@@ -626,6 +626,43 @@ fn twin_matchers_shows_a_pair() {
     }
 }
 
+/// Two line-assisted Lorentzians side by side on every row of `sets(150, seed)` for each of
+/// `seeds`: per row, each one's right answers and median correspondence searches a pair.
+/// Edmonton's sparse scans take neither matcher's dense-scan rules, so there the two must give
+/// the same answers.
+fn rows_side_by_side(
+    matchers: [&robot::localization::Lorentz; 2],
+    seeds: [u64; 2],
+) -> BTreeMap<String, ([usize; 2], [u32; 2])> {
+    let mut rows: BTreeMap<String, ([usize; 2], [Vec<u32>; 2])> = BTreeMap::new();
+    for seed in seeds {
+        for set in sets(150, seed) {
+            let (right, searches) = rows.entry(set.name.clone()).or_default();
+            for c in &set.cases {
+                let [a, b] = matchers.map(|m| m.match_scans(&c.reference, &c.current, c.guess));
+                if set.name.contains("edmonton") {
+                    assert_eq!(a, b, "seed {seed}: Edmonton's sparse scans are not changed");
+                }
+                for (k, r) in [a, b].iter().enumerate() {
+                    right[k] += usize::from(is_right(&set, c, r));
+                    searches[k].push(r.iterations);
+                }
+            }
+        }
+    }
+    assert_eq!(rows.len(), 6, "every row of the table");
+    rows.into_iter()
+        .map(|(name, (right, mut searches))| {
+            let medians = searches.each_mut().map(|v| {
+                v.sort_unstable();
+                v[v.len() / 2]
+            });
+            println!("{name}: right {right:?}, median searches {medians:?}");
+            (name, (right, medians))
+        })
+        .collect()
+}
+
 /// On dense scans, in a search whose line normals spread (`LINE_RESIDUALS_SPREAD`), the
 /// line-assisted Lorentzian counts a point projected inside a reference line by its distance
 /// to that line alone, so the estimate no longer crawls along walls by what the projections
@@ -642,31 +679,7 @@ fn point_to_line_residuals_take_fewer_searches() {
         ..Lorentz::with_lines()
     };
     let to_lines = Lorentz::with_lines();
-    // Per row: right answers and correspondence searches, the product form's and the new.
-    let mut rows: BTreeMap<String, ([usize; 2], [Vec<u32>; 2])> = BTreeMap::new();
-    for seed in [13, 14] {
-        for set in sets(150, seed) {
-            let (right, searches) = rows.entry(set.name.clone()).or_default();
-            for c in &set.cases {
-                let a = product.match_scans(&c.reference, &c.current, c.guess);
-                let b = to_lines.match_scans(&c.reference, &c.current, c.guess);
-                if set.name.contains("edmonton") {
-                    assert_eq!(a, b, "seed {seed}: Edmonton keeps the product form");
-                }
-                for (k, r) in [a, b].iter().enumerate() {
-                    right[k] += usize::from(is_right(&set, c, r));
-                    searches[k].push(r.iterations);
-                }
-            }
-        }
-    }
-    assert_eq!(rows.len(), 6, "every row of the table");
-    for (name, (right, searches)) in &mut rows {
-        let [a, b] = searches.each_mut().map(|v| {
-            v.sort_unstable();
-            v[v.len() / 2]
-        });
-        println!("{name}: right {right:?}, median searches {a} -> {b}");
+    for (name, (right, [a, b])) in &rows_side_by_side([&product, &to_lines], [13, 14]) {
         assert!(right[1] + 1 >= right[0], "{name}: right {right:?}");
         if !name.contains("edmonton") {
             assert!(b < a, "{name}: {a} -> {b} searches");
@@ -766,34 +779,11 @@ fn the_first_match_slides_along_its_lines_and_a_loose_answer_is_checked() {
     }
     assert!(
         slid >= 6,
-        "point-to-line everywhere slid on {slid} seeds of 12"
+        "without the second match it slid on {slid} seeds of 12"
     );
-    // Per row: right answers and correspondence searches, the spread rule's and the new.
-    let mut rows: BTreeMap<String, ([usize; 2], [Vec<u32>; 2])> = BTreeMap::new();
-    for seed in [21, 22] {
-        for set in sets(150, seed) {
-            let (right, searches) = rows.entry(set.name.clone()).or_default();
-            for c in &set.cases {
-                let a = gated.match_scans(&c.reference, &c.current, c.guess);
-                let b = first.match_scans(&c.reference, &c.current, c.guess);
-                if set.name.contains("edmonton") {
-                    assert_eq!(a, b, "seed {seed}: Edmonton's sparse scans are not changed");
-                }
-                for (k, r) in [a, b].iter().enumerate() {
-                    right[k] += usize::from(is_right(&set, c, r));
-                    searches[k].push(r.iterations);
-                }
-            }
-        }
-    }
-    assert_eq!(rows.len(), 6, "every row of the table");
+    let rows = rows_side_by_side([&gated, &first], [21, 22]);
     let (mut all_a, mut all_b) = (0, 0);
-    for (name, (right, searches)) in &mut rows {
-        let [a, b] = searches.each_mut().map(|v| {
-            v.sort_unstable();
-            v[v.len() / 2]
-        });
-        println!("{name}: right {right:?}, median searches {a} -> {b}");
+    for (name, (right, [a, b])) in &rows {
         assert!(right[1] + 1 >= right[0], "{name}: right {right:?}");
         (all_a, all_b) = (all_a + right[0], all_b + right[1]);
         if name.starts_with("synthetic, 0") || name.contains("freiburg") {
