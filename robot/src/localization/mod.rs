@@ -8,7 +8,7 @@
 //! |---|---|---|
 //! | `ls` | [`LeastSquares`] point-to-point ICP, the baseline | thesis §5.2 |
 //! | `lorentz` | [`Lorentz`]: Lorentzian error, Newton–Levenberg–Marquardt, σ 2 → 5 → 0.5 cm | thesis §3.4, App. F |
-//! | `lorentz-lines` | the same with line-assisted association; a point-to-line polish, a wide second σ schedule, restarts and a coarse correlative search when an answer is not trusted (not in the thesis) | thesis §3.4.3, App. E.3 |
+//! | `lorentz-lines` | the same with line-assisted association; on dense scans point-to-line residuals where the lines spread and σ narrowing from 5 cm, one NLM step a search in the first match, a point-to-line polish, a wide second σ schedule, restarts and a coarse correlative search when an answer is not trusted (not in the thesis) | thesis §3.4.3, App. E.3 |
 //! | `mbicp` | [`Mbicp`]: metric-based ICP | 002 §2.2 |
 //! | `pl-icp` | [`PointToLine`]: point-to-line ICP with CSM's defaults, the reference | Censi 2008 |
 //!
