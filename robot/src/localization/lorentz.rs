@@ -181,8 +181,8 @@ pub const FIRST_SPREAD: f64 = 0.1;
 /// (synthetic, 0 %), 5985 → 5982 (20 %), 5998 → 5999 (Belgioioso), 5714 → 5717 (Freiburg 101),
 /// 5645 → 5677 (Edmonton) and 5577 → 5595 (large guesses). The fallbacks keep 30: with one
 /// step there too, a restart 15 cm from the guess slid 55 cm down the lab in a closed-loop
-/// `goto-lab` run (seed 2027, trial 73) and the map builder trusted it; two steps a search did
-/// no better than 30 on Edmonton, four little better.
+/// `goto-lab` run (seed 2027, trial 73) and the map builder trusted it. With the steps in every
+/// match, two a search did no better than 30 on Edmonton, four little better.
 pub const FIRST_STEPS: u32 = 1;
 
 /// How many fewer of the current points (as a share) the answer matched again with
