@@ -37,6 +37,8 @@ pub mod protocol;
 pub mod reconstruction;
 pub mod replay;
 pub mod serial;
+#[cfg(test)]
+mod test_rng;
 pub mod time;
 
 pub use drive_geometry::DriveGeometry;

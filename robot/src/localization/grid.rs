@@ -506,14 +506,8 @@ mod tests {
     #[test]
     fn trimming_keeps_the_seen_cells_where_they_were() {
         let (width, height) = (97, 61);
-        // A small generator of its own: the robot crate draws no random numbers.
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move |n: usize| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state % n as u64) as usize
-        };
+        let mut rng = crate::test_rng::XorShift(0x9e37_79b9_7f4a_7c15);
+        let mut next = move |n: usize| (rng.next_u64() % n as u64) as usize;
         for case in 0..200 {
             let mut log_odds = vec![0.0f32; width * height];
             for _ in 0..case % 7 {

@@ -276,13 +276,8 @@ mod tests {
     /// and the two directions agree to 1e-15 at every angle, the axes' included.
     #[test]
     fn the_quick_direction_grows_the_same_lines() {
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut uniform = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = crate::test_rng::XorShift(0x2545_f491_4f6c_dd1d);
+        let mut uniform = move || (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
         let params = LineParams::default();
         let (mut lines, mut points_seen) = (0, 0);
         for scan in 0..200 {

@@ -841,13 +841,8 @@ mod tests {
     #[test]
     fn the_streamed_mesh_is_the_rules_applied_polygon_by_polygon() {
         // A rough, holed surface whose depth jumps now and then, seen rising and falling.
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut noise = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut rng = crate::test_rng::XorShift(0x2545_f491_4f6c_dd1d);
+        let mut noise = move || (rng.next_u64() >> 40) as f32 / (1u64 << 24) as f32;
         for falling in [false, true] {
             let mut scene = wall(23, 41, usize::MAX, 0.0);
             for k in 0..scene.points.len() {
