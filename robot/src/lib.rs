@@ -18,6 +18,8 @@
 //!   the twin's serial face) over serial ports or TCP.
 //! - [`logs`]: readers of recorded runs (CARMEN `.clf`, the `.script` and RobotLogger `.log`
 //!   formats of 002 App. C).
+//! - [`memory`]: storage for grids and masks read and written cell by cell, its pages written
+//!   before use.
 //!
 //! Time is [`Stamp`] (integer nanoseconds) and is always passed in by the caller. Inside, units are
 //! SI and frames follow ROS REP-103 (x forward, y left, z up, angles counter-clockwise); the
@@ -31,6 +33,7 @@ pub mod geometry;
 pub mod hardware;
 pub mod localization;
 pub mod logs;
+pub mod memory;
 pub mod mount;
 pub mod odometry;
 pub mod protocol;

@@ -145,7 +145,7 @@ impl Grid {
             return None;
         }
         let (width, height) = (w as i64, h as i64);
-        let mut scores = vec![0u8; (width * height) as usize];
+        let mut scores = crate::memory::written_zeros::<u8>((width * height) as usize);
         for p in points {
             let (i, j) = (
                 ((p[0] - origin[0]) / cell).floor() as i64,

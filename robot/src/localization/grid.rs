@@ -241,7 +241,7 @@ impl GridBuilder {
         }
         let width = (new_hi[0] - new_lo[0] + 1) as usize;
         let height = (new_hi[1] - new_lo[1] + 1) as usize;
-        let mut cells = vec![0.0f32; width * height];
+        let mut cells = crate::memory::written_zeros::<f32>(width * height);
         for y in 0..self.height {
             let row = (self.lo[1] - new_lo[1]) as usize + y;
             let col = (self.lo[0] - new_lo[0]) as usize;

@@ -512,7 +512,7 @@ impl HalfPixels {
             min,
             columns,
             rows,
-            bits: vec![0; words],
+            bits: robot::memory::written_zeros(words),
         }
     }
 
