@@ -191,85 +191,88 @@ pub struct Written {
 
 /// Writes every output of a run into `dir` (created if needed).
 ///
-/// The files are independent, so the costly ones are written side by side on their own threads
-/// (the map picture, the recording, the occupancy grid, the 3D model's files) while this one
-/// writes the rest: each file's bytes are what one thread would write, and the list comes back in
-/// one fixed order.
+/// The files are independent, so they are written on two threads, one a core: the pictures and
+/// the occupancy grid on one, the recording and the small files on this one (and the 3D model's
+/// files, when the run built any, on a third). Two threads and not one a file: writing them is
+/// bound by the cores, and four threads on two cores took longer than two (the README's *Whole
+/// process against simulation*). Each file's bytes are what one thread would write, and the
+/// list comes back in one fixed order.
 pub fn write_all(record: &RunRecord, scenario: &Scenario, dir: &Path) -> std::io::Result<Written> {
     std::fs::create_dir_all(dir)?;
     let path = |name: &str| dir.join(name);
     // The twin's map of the world answers every picture's and file's questions about it.
     let map = &*record.world_map;
-    let (pictures, recording_file, grid, reconstruction, rest) = std::thread::scope(|s| {
-        let pictures = s.spawn(|| -> std::io::Result<Vec<PathBuf>> {
-            let mut files = vec![path("map.svg"), path("world.json")];
-            write_map_svg(&files[0], record, &scenario.world, map)?;
-            write_world_json(&files[1], scenario, map)?;
-            if let Some(scan) = last_tilted(record) {
-                files.push(path("tilted-scan.svg"));
-                write_tilted_svg(&files[2], scan, &scenario.world, map, &record.scenario)?;
-            }
-            Ok(files)
-        });
-        let recording_file = s.spawn(|| {
-            write_mcap(&path("run.mcap"), &recording(record, scenario))
-                .map(|_| vec![path("run.mcap")])
-        });
-        let grid = s.spawn(|| match &record.streamed {
-            Some(built) => grid::write_grid_files(dir, built.grid.grid().as_ref()),
-            None => write_grid(
-                dir,
-                level_scans(record, scenario).iter().map(|(p, s)| (*p, s)),
-            ),
-        });
-        let reconstruction = s.spawn(|| match &record.reconstruction {
-            Some(recon) => write_reconstruction(dir, recon, &record.scenario, Some(map)),
-            None => Ok(Vec::new()),
-        });
-        let rest = (|| -> std::io::Result<Vec<PathBuf>> {
-            let mut files = vec![path("truth.tum"), path("odometry.tum")];
+    let pictures = || -> std::io::Result<Vec<PathBuf>> {
+        let mut files = vec![path("map.svg"), path("world.json")];
+        write_map_svg(&files[0], record, &scenario.world, map)?;
+        write_world_json(&files[1], scenario, map)?;
+        if let Some(scan) = last_tilted(record) {
+            files.push(path("tilted-scan.svg"));
+            write_tilted_svg(&files[2], scan, &scenario.world, map, &record.scenario)?;
+        }
+        Ok(files)
+    };
+    let grid = || match &record.streamed {
+        Some(built) => grid::write_grid_files(dir, built.grid.grid().as_ref()),
+        None => write_grid(
+            dir,
+            level_scans(record, scenario).iter().map(|(p, s)| (*p, s)),
+        ),
+    };
+    let recording_file = || {
+        write_mcap(&path("run.mcap"), &recording(record, scenario)).map(|_| vec![path("run.mcap")])
+    };
+    let small_files = || -> std::io::Result<Vec<PathBuf>> {
+        let mut files = vec![path("truth.tum"), path("odometry.tum")];
+        write_tum(
+            &files[0],
+            record.scans.iter().map(|r| (r.scan.stamp, r.truth)),
+        )?;
+        write_tum(
+            &files[1],
+            record.scans.iter().map(|r| (r.scan.stamp, r.odometry)),
+        )?;
+        if let Some(loc) = &record.localisation {
+            files.push(path("estimate.tum"));
             write_tum(
-                &files[0],
-                record.scans.iter().map(|r| (r.scan.stamp, r.truth)),
+                &path("estimate.tum"),
+                loc.placed.iter().map(|p| (p.stamp, p.estimate)),
             )?;
-            write_tum(
-                &files[1],
-                record.scans.iter().map(|r| (r.scan.stamp, r.odometry)),
-            )?;
-            if let Some(loc) = &record.localisation {
-                files.push(path("estimate.tum"));
-                write_tum(
-                    &path("estimate.tum"),
-                    loc.placed.iter().map(|p| (p.stamp, p.estimate)),
-                )?;
-            }
-            files.push(path("scans.jsonl"));
-            match &record.streamed {
-                Some(built) => robot::logs::write_file(path("scans.jsonl"), &built.scan_lines)?,
-                None => write_scans(&path("scans.jsonl"), &record.scans, &scenario.robot.mount())?,
-            }
-            files.push(path("summary.json"));
-            Summary::of(record, (&scenario.world.name, &scenario.robot.name))
-                .write(&path("summary.json"))?;
-            if let Some(sonar) = &record.sonar {
-                files.push(path("sonar.json"));
-                write_sonar(&path("sonar.json"), sonar)?;
-            }
-            if !record.decisions.is_empty() {
-                files.push(path("decisions.jsonl"));
-                write_decisions(&path("decisions.jsonl"), &record.decisions)?;
-            }
-            Ok(files)
-        })();
-        let join = |h: std::thread::ScopedJoinHandle<'_, _>| {
-            h.join()
-                .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
-        };
+        }
+        files.push(path("scans.jsonl"));
+        match &record.streamed {
+            Some(built) => robot::logs::write_file(path("scans.jsonl"), &built.scan_lines)?,
+            None => write_scans(&path("scans.jsonl"), &record.scans, &scenario.robot.mount())?,
+        }
+        files.push(path("summary.json"));
+        Summary::of(record, (&scenario.world.name, &scenario.robot.name))
+            .write(&path("summary.json"))?;
+        if let Some(sonar) = &record.sonar {
+            files.push(path("sonar.json"));
+            write_sonar(&path("sonar.json"), sonar)?;
+        }
+        if !record.decisions.is_empty() {
+            files.push(path("decisions.jsonl"));
+            write_decisions(&path("decisions.jsonl"), &record.decisions)?;
+        }
+        Ok(files)
+    };
+    fn join<T>(h: std::thread::ScopedJoinHandle<'_, T>) -> T {
+        h.join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+    }
+    let ((pictures, grid), reconstruction, recording_file, rest) = std::thread::scope(|s| {
+        let drawn = s.spawn(|| (pictures(), grid()));
+        let reconstruction = record
+            .reconstruction
+            .as_ref()
+            .map(|recon| s.spawn(|| write_reconstruction(dir, recon, &record.scenario, Some(map))));
+        let recording_file = recording_file();
+        let rest = small_files();
         (
-            join(pictures),
-            join(recording_file),
-            join(grid),
-            join(reconstruction),
+            join(drawn),
+            reconstruction.map_or(Ok(Vec::new()), join),
+            recording_file,
             rest,
         )
     });
