@@ -7,7 +7,8 @@
 //! one of the process's threads: an interrupt to each. A run's grid and its map picture did that
 //! once per page of their storage, each time interrupting the simulation on the other core.
 //! [`written_zeros`] writes its zeros instead, so each page is faulted in once, writable, with
-//! nothing to flush.
+//! nothing to flush (the occupancy grid, which copies its old rows into new storage as it grows,
+//! writes its rows and zeros in one pass to the same end).
 
 /// `n` zeros (`T::default()`), every page written now (see the module's notes).
 pub fn written_zeros<T: Copy + Default>(n: usize) -> Vec<T> {

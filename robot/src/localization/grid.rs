@@ -241,12 +241,19 @@ impl GridBuilder {
         }
         let width = (new_hi[0] - new_lo[0] + 1) as usize;
         let height = (new_hi[1] - new_lo[1] + 1) as usize;
-        let mut cells = crate::memory::written_zeros::<f32>(width * height);
-        for y in 0..self.height {
-            let row = (self.lo[1] - new_lo[1]) as usize + y;
-            let col = (self.lo[0] - new_lo[0]) as usize;
-            cells[row * width + col..row * width + col + self.width]
-                .copy_from_slice(&self.log_odds[y * self.width..(y + 1) * self.width]);
+        // Written once, row by row: the old rows where they were, zeros elsewhere; every page
+        // written before a cell of it is read (`crate::memory`).
+        let row_shift = self.lo[1] - new_lo[1];
+        let mut cells = Vec::with_capacity(width * height);
+        for row in 0..height {
+            let y = row as i64 - row_shift;
+            if (0..self.height as i64).contains(&y) {
+                // The old storage lies within the new one, so both shifts are ≥ 0.
+                let (y, col) = (y as usize, (self.lo[0] - new_lo[0]) as usize);
+                cells.resize(row * width + col, 0.0f32);
+                cells.extend_from_slice(&self.log_odds[y * self.width..(y + 1) * self.width]);
+            }
+            cells.resize((row + 1) * width, 0.0f32);
         }
         self.lo = new_lo;
         self.width = width;
