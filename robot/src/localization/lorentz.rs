@@ -4,9 +4,10 @@
 //! line-assisted association (§3.4.3).
 
 use super::correlative;
+use super::kdtree::LastNearest;
 use super::lines::{Line, LineParams, lines_of};
 use super::matcher::{Convergence, MatchResult, Reference, ScanMatcher, solve3, transform_all};
-use super::quality::{MatchQuality, TrustRule, polish};
+use super::quality::{MatchQuality, TrustRule, polish_near};
 use super::scan::ScanPoints;
 use crate::geometry::{Pose2, wrap_angle};
 
@@ -847,27 +848,37 @@ impl Lorentz {
             }
         }
         result.pose = Pose2::new(phi[1], phi[2], wrap_angle(phi[0]));
+        // The polish and the judgement search near where the passes did: `last` goes on.
+        let rule = TrustRule::default();
         if self.polish_rounds > 0 {
-            result.pose = self.polish(reference, current, result.pose);
+            result.pose = self.polish(reference, current, result.pose, &mut last);
             if let Some((phi, margin)) = before_last {
-                let rule = TrustRule::default();
-                let earlier = self.polish(reference, current, Pose2::new(phi[1], phi[2], phi[0]));
-                let (last, earlier_quality) = (
-                    rule.assess(reference, &current.xy, &result.pose),
-                    rule.assess(reference, &current.xy, &earlier),
-                );
-                result.quality = last;
-                if earlier_quality.inlier_share > last.inlier_share + margin {
+                let earlier = Pose2::new(phi[1], phi[2], phi[0]);
+                let earlier = self.polish(reference, current, earlier, &mut last);
+                let earlier_quality =
+                    rule.assess_near(reference, &current.xy, &earlier, Some(&mut last));
+                result.quality =
+                    rule.assess_near(reference, &current.xy, &result.pose, Some(&mut last));
+                if earlier_quality.inlier_share > result.quality.inlier_share + margin {
                     (result.pose, result.quality) = (earlier, earlier_quality);
                 }
+                return result;
             }
         }
+        result.quality = rule.assess_near(reference, &current.xy, &result.pose, Some(&mut last));
         result
     }
 
     /// The point-to-line polish of `pose`, at most `polish_rounds` rounds.
-    fn polish(&self, reference: &Reference, current: &ScanPoints, pose: Pose2) -> Pose2 {
-        let polished = polish(reference, &current.xy, pose, self.polish_rounds, 0.01, 0.05);
+    fn polish(
+        &self,
+        reference: &Reference,
+        current: &ScanPoints,
+        pose: Pose2,
+        last: &mut [Option<LastNearest>],
+    ) -> Pose2 {
+        let rounds = (self.polish_rounds, 0.01, 0.05);
+        let polished = polish_near(reference, &current.xy, pose, rounds, last);
         Pose2::new(polished.x, polished.y, wrap_angle(polished.theta))
     }
 }

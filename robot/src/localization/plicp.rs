@@ -177,7 +177,7 @@ impl PointToLine {
                 };
                 let (a, b) = (refs[j1], refs[j2]);
                 let e = [b[0] - a[0], b[1] - a[1]];
-                let length = e[0].hypot(e[1]);
+                let length = (e[0] * e[0] + e[1] * e[1]).sqrt();
                 if length < 1e-9 {
                     continue;
                 }
@@ -211,8 +211,11 @@ impl PointToLine {
             if k < 3 {
                 break;
             }
-            distances.sort_unstable_by(f64::total_cmp);
-            let at = |share: f64| distances[((k as f64 * share) as usize).min(k - 1)];
+            // Each order statistic by selection, as CSM's `hoare_selection`, not a sort.
+            let mut at = |share: f64| {
+                let rank = ((k as f64 * share) as usize).min(k - 1);
+                *distances.select_nth_unstable_by(rank, f64::total_cmp).1
+            };
             let limit = at(self.max_share).min(self.adaptive_mult * at(self.adaptive_order));
             pairs.clear();
             found.error = 0.0;
@@ -273,7 +276,8 @@ fn segment_distance(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
     } else {
         0.0
     };
-    (p[0] - a[0] - t * e[0]).hypot(p[1] - a[1] - t * e[1])
+    let (dx, dy) = (p[0] - a[0] - t * e[0], p[1] - a[1] - t * e[1]);
+    (dx * dx + dy * dy).sqrt()
 }
 
 #[cfg(test)]

@@ -117,13 +117,28 @@ impl TrustRule {
         current: &[[f64; 2]],
         pose: &Pose2,
     ) -> MatchQuality {
+        self.assess_near(reference, current, pose, None)
+    }
+
+    /// [`TrustRule::assess`] with each current point's last nearest reference point kept in
+    /// `last` (one for each current point, as [`KdTree::nearest_cached`] keeps them): the
+    /// same quality, searched less when the points were searched for near there before.
+    ///
+    /// [`KdTree::nearest_cached`]: super::KdTree::nearest_cached
+    pub fn assess_near(
+        &self,
+        reference: &Reference,
+        current: &[[f64; 2]],
+        pose: &Pose2,
+        last: Option<&mut [Option<LastNearest>]>,
+    ) -> MatchQuality {
         if current.is_empty() || reference.points.is_empty() {
             return MatchQuality::NONE;
         }
         let mut information = [[0.0f64; 3]; 3];
         let mut gradient = [0.0f64; 3];
         let (mut inliers, mut sum2) = (0usize, 0.0f64);
-        for constraint in constraints(reference, current, pose, None) {
+        for constraint in constraints(reference, current, pose, last) {
             let distance = constraint.residual.abs();
             if distance > self.inlier_m {
                 continue;
@@ -174,7 +189,7 @@ impl TrustRule {
 pub fn polish(
     reference: &Reference,
     current: &[[f64; 2]],
-    mut pose: Pose2,
+    pose: Pose2,
     rounds: usize,
     c: f64,
     gate: f64,
@@ -182,10 +197,26 @@ pub fn polish(
     // Each point's last nearest reference point, kept from round to round: the pose moves
     // little, and the search is skipped while no other point can have come nearer.
     let mut last = vec![None; current.len()];
+    polish_near(reference, current, pose, (rounds, c, gate), &mut last)
+}
+
+/// [`polish`] with each current point's last nearest reference point kept in `last` (one for
+/// each current point, as [`KdTree::nearest_cached`] keeps them), from before the polish and
+/// for after it: the same answer, searched less when the points were searched for near there
+/// before (by the matcher whose answer is polished).
+///
+/// [`KdTree::nearest_cached`]: super::KdTree::nearest_cached
+pub fn polish_near(
+    reference: &Reference,
+    current: &[[f64; 2]],
+    mut pose: Pose2,
+    (rounds, c, gate): (usize, f64, f64),
+    last: &mut [Option<LastNearest>],
+) -> Pose2 {
     for _ in 0..rounds {
         let mut h = [[0.0f64; 3]; 3];
         let mut g = [0.0f64; 3];
-        for constraint in constraints(reference, current, &pose, Some(&mut last)) {
+        for constraint in constraints(reference, current, &pose, Some(&mut *last)) {
             let e = constraint.residual;
             if let Some(jac) = constraint.jacobian
                 && e.abs() <= gate
@@ -444,6 +475,45 @@ mod tests {
         assert!(q.inlier_share > 0.99, "{q:?}");
         assert!(q.sigma[0] > 1.0, "{q:?}");
         assert!(!rule.trusts(&q));
+    }
+
+    /// The polish and the judgement answer the same, to the last bit, whether each point's
+    /// last nearest reference point is kept from searches near there before (the matcher's,
+    /// from another pose, the other's) or not: the cache skips searches, never changes an
+    /// answer. Over a noisy corner with exact ties (points 4 cm apart, queries halfway).
+    #[test]
+    fn searching_near_earlier_queries_changes_nothing() {
+        let rule = TrustRule::default();
+        let reference = reference(&corner());
+        let current: Vec<[f64; 2]> = corner()
+            .iter()
+            .enumerate()
+            .map(|(i, p)| [p[0] - 0.2 + 0.003 * ((i * 7) % 5) as f64, p[1] + 0.02])
+            .collect();
+        let mut last = vec![None; current.len()];
+        for (k, start) in [
+            Pose2::new(0.21, -0.03, 0.01),
+            Pose2::new(0.2, -0.02, 0.0),
+            Pose2::new(0.0, 0.0, 0.0),
+            Pose2::new(0.25, 0.01, -0.02),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let cached = polish_near(&reference, &current, start, (5, 0.01, 0.05), &mut last);
+            let fresh = polish(&reference, &current, start, 5, 0.01, 0.05);
+            assert_eq!(cached, fresh, "start {k}");
+            let judged = rule.assess_near(&reference, &current, &cached, Some(&mut last));
+            assert_eq!(
+                judged,
+                rule.assess(&reference, &current, &fresh),
+                "start {k}"
+            );
+        }
+        assert!(
+            last.iter().all(Option::is_some),
+            "every point was searched for"
+        );
     }
 
     #[test]
