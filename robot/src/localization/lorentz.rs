@@ -7,7 +7,7 @@ use super::correlative;
 use super::kdtree::LastNearest;
 use super::lines::{Line, LineParams, lines_of};
 use super::matcher::{Convergence, MatchResult, Reference, ScanMatcher, solve3, transform_all};
-use super::quality::{MatchQuality, TrustRule, polish_near};
+use super::quality::{TrustRule, polish_near};
 use super::scan::ScanPoints;
 use crate::geometry::{Pose2, wrap_angle};
 
@@ -606,23 +606,23 @@ impl ScanMatcher for Lorentz {
         });
         let sigmas = self.schedule_for(dense);
         let first_steps = self.first_max_steps.unwrap_or(self.max_steps);
+        // Each current point's last nearest reference point, for every search of the match.
+        let mut last = vec![None; current.len()];
+        let scans = (reference, current);
+        // Every answer is judged by `passes`, by the rule `align` applies, so it carries its
+        // quality and `align` does not judge it again.
         let mut first = self.passes(
             (sigmas, first_steps),
-            reference,
-            current,
+            scans,
             lines.as_ref(),
             guess,
+            &mut last,
         );
         let more = !self.restarts.is_empty() || !self.wide_sigmas_m.is_empty();
         if !more && first_spread.is_none() {
             return first;
         }
-        // Judged here by the rule `align` applies, so the answer carries its quality and
-        // `align` does not judge it again.
         let rule = TrustRule::default();
-        if first.quality == MatchQuality::NONE {
-            first.quality = rule.assess(reference, &current.xy, &first.pose);
-        }
         // From here on every match asks `line_residuals_spread` of the spread. A loose first
         // answer is matched again so, and that answer is kept unless the first fits clearly
         // more points.
@@ -630,7 +630,13 @@ impl ScanMatcher for Lorentz {
             assist.spread = spread;
         }
         if first_spread.is_some() && first.quality.inlier_share < self.wide_below {
-            let again = self.judged((sigmas, first_steps), (reference, current), &lines, guess);
+            let again = self.passes(
+                (sigmas, first_steps),
+                scans,
+                lines.as_ref(),
+                guess,
+                &mut last,
+            );
             let iterations = first.iterations + again.iterations;
             if rule.trusts(&again.quality)
                 && again.quality.inlier_share + FIRST_SPREAD_MARGIN >= first.quality.inlier_share
@@ -651,11 +657,12 @@ impl ScanMatcher for Lorentz {
         let mut best: Option<(MatchResult, f64)> = None;
         let mut iterations = first.iterations;
         if !self.wide_sigmas_m.is_empty() && (!trusted || (loose && far)) {
-            let wide = self.judged(
+            let wide = self.passes(
                 (&self.wide_sigmas_m, self.max_steps),
-                (reference, current),
-                &lines,
+                scans,
+                lines.as_ref(),
                 guess,
+                &mut last,
             );
             iterations += wide.iterations;
             if rule.trusts(&wide.quality) {
@@ -696,11 +703,12 @@ impl ScanMatcher for Lorentz {
         };
         for offset in &self.restarts {
             let start = guess.compose(offset);
-            let result = self.judged(
+            let result = self.passes(
                 (sigmas, self.max_steps),
-                (reference, current),
-                &lines,
+                scans,
+                lines.as_ref(),
                 start,
+                &mut last,
             );
             keep(result, f64::NEG_INFINITY, &mut best);
         }
@@ -712,11 +720,12 @@ impl ScanMatcher for Lorentz {
             let (from, to) = (&reference.points.xy, &current.xy);
             let floor = first.quality.inlier_share + COARSE_MARGIN;
             for start in correlative::best_starts(from, to, guess, window, (*count, 3)) {
-                let result = self.judged(
+                let result = self.passes(
                     (sigmas, self.max_steps),
-                    (reference, current),
-                    &lines,
+                    scans,
+                    lines.as_ref(),
                     start,
+                    &mut last,
                 );
                 keep(result, floor, &mut best);
             }
@@ -750,30 +759,17 @@ impl Lorentz {
             && beam_step(current).is_some_and(|step| step < self.dense_below_rad)
     }
 
-    /// [`Lorentz::passes`] from `start`, the answer judged by the trust rule.
-    fn judged(
-        &self,
-        schedule: (&[f64], u32),
-        (reference, current): (&Reference, &ScanPoints),
-        lines: &Option<Assist>,
-        start: Pose2,
-    ) -> MatchResult {
-        let mut result = self.passes(schedule, reference, current, lines.as_ref(), start);
-        if result.quality == MatchQuality::NONE {
-            result.quality = TrustRule::default().assess(reference, &current.xy, &result.pose);
-        }
-        result
-    }
-
     /// The σ passes of `sigmas`, at most `steps` NLM steps a search, and the polish from
-    /// `guess`.
+    /// `guess`; the answer judged by the trust rule. `last` keeps each current point's last
+    /// nearest reference point from one search to the next, and from one call to the next of
+    /// a match (the same answers, searched less).
     fn passes(
         &self,
         (sigmas, steps): (&[f64], u32),
-        reference: &Reference,
-        current: &ScanPoints,
+        (reference, current): (&Reference, &ScanPoints),
         lines: Option<&Assist>,
         guess: Pose2,
+        last: &mut [Option<LastNearest>],
     ) -> MatchResult {
         let mut phi = [guess.theta, guess.x, guess.y];
         let mut moved = Vec::with_capacity(current.len());
@@ -781,9 +777,6 @@ impl Lorentz {
         let mut targets = Vec::with_capacity(current.len());
         // Each pair's reference line normal, where its target is a projection inside one.
         let mut normals = Vec::with_capacity(current.len());
-        // Each point's last nearest reference point: the search is skipped while the point
-        // moves too little for another to come nearer (the same answers, sooner).
-        let mut last = vec![None; current.len()];
         let mut result = MatchResult::unmatched(guess);
         // The estimate before the last σ pass (not the guess), when it is to be polished too.
         let mut before_last = None;
@@ -851,21 +844,21 @@ impl Lorentz {
         // The polish and the judgement search near where the passes did: `last` goes on.
         let rule = TrustRule::default();
         if self.polish_rounds > 0 {
-            result.pose = self.polish(reference, current, result.pose, &mut last);
+            result.pose = self.polish(reference, current, result.pose, last);
             if let Some((phi, margin)) = before_last {
                 let earlier = Pose2::new(phi[1], phi[2], phi[0]);
-                let earlier = self.polish(reference, current, earlier, &mut last);
+                let earlier = self.polish(reference, current, earlier, last);
                 let earlier_quality =
-                    rule.assess_near(reference, &current.xy, &earlier, Some(&mut last));
+                    rule.assess_near(reference, &current.xy, &earlier, Some(&mut *last));
                 result.quality =
-                    rule.assess_near(reference, &current.xy, &result.pose, Some(&mut last));
+                    rule.assess_near(reference, &current.xy, &result.pose, Some(&mut *last));
                 if earlier_quality.inlier_share > result.quality.inlier_share + margin {
                     (result.pose, result.quality) = (earlier, earlier_quality);
                 }
                 return result;
             }
         }
-        result.quality = rule.assess_near(reference, &current.xy, &result.pose, Some(&mut last));
+        result.quality = rule.assess_near(reference, &current.xy, &result.pose, Some(&mut *last));
         result
     }
 
