@@ -842,23 +842,20 @@ impl Lorentz {
         }
         result.pose = Pose2::new(phi[1], phi[2], wrap_angle(phi[0]));
         // The polish and the judgement search near where the passes did: `last` goes on.
-        let rule = TrustRule::default();
         if self.polish_rounds > 0 {
             result.pose = self.polish(reference, current, result.pose, last);
-            if let Some((phi, margin)) = before_last {
-                let earlier = Pose2::new(phi[1], phi[2], phi[0]);
-                let earlier = self.polish(reference, current, earlier, last);
-                let earlier_quality =
-                    rule.assess_near(reference, &current.xy, &earlier, Some(&mut *last));
-                result.quality =
-                    rule.assess_near(reference, &current.xy, &result.pose, Some(&mut *last));
-                if earlier_quality.inlier_share > result.quality.inlier_share + margin {
-                    (result.pose, result.quality) = (earlier, earlier_quality);
-                }
-                return result;
+        }
+        let rule = TrustRule::default();
+        result.quality = rule.assess_near(reference, &current.xy, &result.pose, Some(&mut *last));
+        // Set only with the polish.
+        if let Some((phi, margin)) = before_last {
+            let earlier = Pose2::new(phi[1], phi[2], phi[0]);
+            let earlier = self.polish(reference, current, earlier, last);
+            let quality = rule.assess_near(reference, &current.xy, &earlier, Some(&mut *last));
+            if quality.inlier_share > result.quality.inlier_share + margin {
+                (result.pose, result.quality) = (earlier, quality);
             }
         }
-        result.quality = rule.assess_near(reference, &current.xy, &result.pose, Some(&mut *last));
         result
     }
 

@@ -45,5 +45,5 @@ pub use matcher::{
 };
 pub use mbicp::Mbicp;
 pub use plicp::PointToLine;
-pub use quality::{MatchQuality, TrustRule, polish, polish_near};
+pub use quality::{MatchQuality, TrustRule, polish};
 pub use scan::{RangeScan, ScanPoints};
