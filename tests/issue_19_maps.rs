@@ -408,10 +408,11 @@ fn a_bad_map_table_names_its_field() {
     }
 }
 
-/// `twin run` builds the occupancy grid, the scans' lines and the tape's JSON on a thread of
-/// their own while the simulation goes on; the files it writes are, byte for byte, the ones
-/// built from the run's record afterwards — with the estimate (lab tour), by odometry (glass door), with scenes left
-/// out (scene lab) and with the laser on the pan-tilt (thesis tour), across seeds.
+/// `twin run` builds the occupancy grid, the scans' lines, the recording, the trajectories and
+/// the map picture's scan points on a thread of their own while the simulation goes on; the
+/// files it writes are, byte for byte, the ones built from the run's record afterwards — with
+/// the estimate (lab tour), by odometry (glass door), with scenes left out (scene lab) and with
+/// the laser on the pan-tilt (thesis tour), across seeds.
 #[test]
 fn the_files_built_during_a_run_are_the_files_built_after_it() {
     use sim::commands::run::{RunOptions, run_scenario};
@@ -428,7 +429,11 @@ fn the_files_built_during_a_run_are_the_files_built_after_it() {
             ..RunOptions::default()
         };
         let streamed = run_scenario(&scenario(name), &options, |_, _| {}).expect("the run");
-        assert!(streamed.streamed.is_some(), "{name}: built as it went");
+        let built = streamed.streamed.as_ref().expect("built as it went");
+        assert!(
+            built.run_mcap.is_some() && built.dots.is_some() && built.tum.is_some(),
+            "{name}: the recording, the picture's points and the trajectories built as it went"
+        );
         let mut after = streamed.clone();
         after.streamed = None;
         let (a, b) = (
@@ -437,7 +442,15 @@ fn the_files_built_during_a_run_are_the_files_built_after_it() {
         );
         sim::output::write_all(&streamed, &scenario(name), &a).unwrap();
         sim::output::write_all(&after, &scenario(name), &b).unwrap();
-        for file in ["map.pgm", "map.yaml", "scans.jsonl", "run.mcap"] {
+        for file in [
+            "map.pgm",
+            "map.yaml",
+            "scans.jsonl",
+            "run.mcap",
+            "map.svg",
+            "truth.tum",
+            "odometry.tum",
+        ] {
             let (x, y) = (std::fs::read(a.join(file)), std::fs::read(b.join(file)));
             assert!(x.is_ok(), "{name}: {file} written");
             assert!(x.ok() == y.ok(), "{name} seed {seed}: {file} differs");

@@ -224,3 +224,86 @@ fn compressed_bags_map_and_replay_like_the_plain_one() {
         }
     }
 }
+
+/// `run.mcap` holds the run's events in the order they happened, as the run writes it while it
+/// goes on: `/tf_static` first, then the tape's exchanges in their order with each kept scan's
+/// topics after the exchange that brought the scan back — so a reader going through the file
+/// meets each scan within a second of simulated time of the exchanges around it — and the file
+/// is the one the run's record gives afterwards.
+#[test]
+fn the_recording_holds_the_runs_events_in_the_order_they_happened() {
+    use sim::commands::run::{RunOptions, run_scenario};
+    let scenario = crate::common::scenario("lab-tour");
+    for seed in [4, 9] {
+        let options = RunOptions {
+            seed: Some(seed),
+            stream: true,
+            ..RunOptions::default()
+        };
+        let record = run_scenario(&scenario, &options, |_, _| {}).expect("the run");
+        let dir =
+            std::env::temp_dir().join(format!("twin-issue-19-order-{}-{seed}", std::process::id()));
+        sim::output::write_all(&record, &scenario, &dir).unwrap();
+        let bytes = std::fs::read(dir.join("run.mcap")).unwrap();
+        let messages: Vec<(String, u64, Vec<u8>)> = mcap::MessageStream::new(&bytes)
+            .expect("an MCAP file")
+            .map(|m| {
+                let m = m.expect("a message");
+                (m.channel.topic.clone(), m.log_time, m.data.to_vec())
+            })
+            .collect();
+        assert_eq!(
+            messages[0].0, "/tf_static",
+            "seed {seed}: the static frames first"
+        );
+        // The stamp of the scan each exchange brought back, if any (CDR: a 4-byte header, the
+        // string's length, the JSON).
+        let tape: Vec<(usize, u64, Option<u64>)> = messages
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| m.0 == "/hardware/tape")
+            .map(|(k, m)| {
+                let json: serde_json::Value =
+                    serde_json::from_slice(&m.2[8..m.2.len() - 1]).expect("JSON");
+                (k, m.1, json["scan"]["stamp"].as_u64())
+            })
+            .collect();
+        assert_eq!(tape.len(), record.tape.len(), "seed {seed}: every exchange");
+        let scans: Vec<(usize, u64)> = messages
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| m.0 == "/clock")
+            .map(|(k, m)| (k, m.1))
+            .collect();
+        assert_eq!(
+            scans.len(),
+            record.scans.len(),
+            "seed {seed}: every kept scan"
+        );
+        for &(k, t) in &scans {
+            let brought = tape
+                .iter()
+                .position(|e| e.2 == Some(t))
+                .unwrap_or_else(|| panic!("seed {seed}: no exchange brought the scan at {t} ns"));
+            assert!(
+                tape[brought].0 < k,
+                "seed {seed}: the scan at {t} ns comes before the exchange that brought it"
+            );
+            let before = tape.iter().rev().find(|e| e.0 < k).expect("an exchange");
+            assert!(
+                before.1.abs_diff(t) < 1_000_000_000,
+                "seed {seed}: the scan at {t} ns is {} ns from the exchange before it",
+                before.1.abs_diff(t)
+            );
+        }
+        let mut after = record.clone();
+        after.streamed = None;
+        let again = dir.join("after");
+        sim::output::write_all(&after, &scenario, &again).unwrap();
+        assert!(
+            std::fs::read(again.join("run.mcap")).unwrap() == bytes,
+            "seed {seed}: the recording written afterwards is another file"
+        );
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}

@@ -2,6 +2,10 @@
 //! it, the true path, the sonar ring's last reading, the scan-matching estimate, the 3D models. The files of
 //! [`crate::output`] and the checks of [`crate::commands::check`] are computed from it.
 
+pub mod dots;
+
+pub use dots::ScanDots;
+
 use crate::devices::laser::LaserFrame;
 use crate::world::score::Accuracy;
 use robot::control::SceneTag;
@@ -24,6 +28,9 @@ pub struct ScanRecord {
     pub frame: LaserFrame,
     /// The 3D scene the scan belongs to, if a `scene` or `survey` step took it.
     pub scene: Option<SceneTag>,
+    /// How many exchanges of the tape were noted before the tour handed the scan over, when the
+    /// run kept count (one that streamed its files did): where `run.mcap` puts its topics.
+    pub after_exchanges: Option<usize>,
 }
 
 /// One full reading of the sonar ring, taken at rest at the end of a run.
@@ -98,8 +105,13 @@ pub struct Streamed {
     pub grid: robot::localization::GridBuilder,
     /// The bytes of `scans.jsonl`.
     pub scan_lines: Vec<u8>,
-    /// Each exchange of the tape as JSON, in the tape's order (`run.mcap`'s `/hardware/tape`).
-    pub tape_json: Vec<String>,
+    /// `map.svg`'s scan points. `None` unless every kept scan was drawn from the very true pose
+    /// and laser frame the record holds.
+    pub dots: Option<ScanDots>,
+    /// The bytes of `run.mcap`, under the same condition.
+    pub run_mcap: Option<Vec<u8>>,
+    /// The bytes of `truth.tum` and `odometry.tum`, under the same condition.
+    pub tum: Option<[Vec<u8>; 2]>,
 }
 
 /// What the localisation made of a run's scans.

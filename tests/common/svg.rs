@@ -104,12 +104,41 @@ fn path_points(d: &str) -> Vec<[f64; 2]> {
     points
 }
 
+/// A group's `transform` of the form `translate(x y) scale(s)` (either part may be missing):
+/// the scale and the shift. Any other transform on a group is not drawn by the twin.
+fn placement(transform: &str) -> (f64, [f64; 2]) {
+    let args = |name: &str| -> Option<Vec<f64>> {
+        let at = transform.find(&format!("{name}("))? + name.len() + 1;
+        let end = transform[at..].find(')')? + at;
+        Some(
+            transform[at..end]
+                .split([' ', ','])
+                .filter(|v| !v.is_empty())
+                .map(|v| v.parse().expect("a number in a transform"))
+                .collect(),
+        )
+    };
+    assert!(
+        transform
+            .split(')')
+            .map(str::trim)
+            .filter(|part| !part.is_empty())
+            .all(|part| part.starts_with("translate(") || part.starts_with("scale(")),
+        "a group transform other than translate and scale: {transform}"
+    );
+    let shift = args("translate").map_or([0.0, 0.0], |t| [t[0], t.get(1).copied().unwrap_or(0.0)]);
+    let scale = args("scale").map_or(1.0, |s| s[0]);
+    (scale, shift)
+}
+
 /// Reads `svg`.
 pub fn read(svg: &str) -> Picture {
     let mut picture = Picture::default();
     let mut fonts: Vec<f64> = Vec::new();
     // Open `<g data-layer>` groups and whether they drew anything.
     let mut groups: Vec<Option<(String, bool)>> = Vec::new();
+    // Each open group's placement of what it holds: a point `p` lands at `scale × p + shift`.
+    let mut placements: Vec<(f64, [f64; 2])> = vec![(1.0, [0.0, 0.0])];
     let mut rest = svg;
     while let Some(open) = rest.find('<') {
         let close = rest[open..].find('>').expect("a closed tag") + open;
@@ -138,10 +167,17 @@ pub fn read(svg: &str) -> Picture {
                     picture.legend.push(k.to_string());
                 }
                 groups.push(layer);
+                let (scale, shift) = *placements.last().expect("the canvas's placement");
+                let (s, t) = attr(tag, "transform").map_or((1.0, [0.0, 0.0]), placement);
+                placements.push((
+                    scale * s,
+                    [scale * t[0] + shift[0], scale * t[1] + shift[1]],
+                ));
                 continue;
             }
             "/g" => {
                 fonts.pop();
+                placements.pop();
                 if let Some(Some((key, drew))) = groups.pop()
                     && !drew
                 {
@@ -215,6 +251,12 @@ pub fn read(svg: &str) -> Picture {
             }
             _ => None,
         };
+        // Placed by the groups it is in.
+        let extent = extent.map(|(min, max)| {
+            let (scale, shift) = *placements.last().expect("the canvas's placement");
+            let at = |p: [f64; 2]| [scale * p[0] + shift[0], scale * p[1] + shift[1]];
+            (at(min), at(max))
+        });
         if let Some((min, max)) = extent {
             if let Some(Some((_, drew))) = groups.iter_mut().rev().find(|g| g.is_some()) {
                 *drew = true;

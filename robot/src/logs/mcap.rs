@@ -138,13 +138,19 @@ impl<W: Write + Seek> Recorder<W> {
     }
 
     /// Writes the summary and flushes.
-    pub fn finish(mut self) -> Result<(), RecordError> {
+    pub fn finish(self) -> Result<(), RecordError> {
+        self.finish_into().map(drop)
+    }
+
+    /// Writes the summary and flushes; the writer back.
+    pub fn finish_into(mut self) -> Result<W, RecordError> {
         self.writer.finish()?;
         let mut inner = self.writer.into_inner();
         inner.flush().map_err(|source| RecordError::Io {
             file: "the recording".into(),
             source,
-        })
+        })?;
+        Ok(inner)
     }
 }
 

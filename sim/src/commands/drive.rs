@@ -283,6 +283,7 @@ pub fn write_drive(
                     scan,
                     odometry: *odometry,
                     truth: None,
+                    after: None,
                 })
                 .collect(),
             estimate: record
@@ -300,7 +301,6 @@ pub fn write_drive(
                 .map(|e| (e.stamp, e.device.to_string(), e.what.clone()))
                 .collect(),
             tape: &record.tape,
-            tape_json: None,
         },
     )?;
     let pose = |p: &Pose2| [p.x, p.y, p.theta];

@@ -122,6 +122,7 @@ impl Live {
             scan,
             odometry,
             truth,
+            after: None,
         };
         let scan_time = crate::output::scan_period_s(&scenario.robot.laser);
         for (topic, msg) in scan_topics(&recorded, &scenario.robot.mount(), scan_time) {
@@ -150,6 +151,7 @@ impl Live {
             scan: &empty,
             odometry: robot::Pose2::IDENTITY,
             truth: Some(robot::Pose2::IDENTITY),
+            after: None,
         };
         for (topic, msg) in crate::output::scan_topics(&example, &scenario.robot.mount(), 0.0) {
             self.server.advertise(topic, &msg);
@@ -387,9 +389,15 @@ pub fn run_scenario(
     let mut robot = SimRobot::from_scenario(&scenario)?;
     robot.twin_mut().set_gliding(!options.physics_every_step);
     let mut taped = Taped::new(robot);
-    let mut stream = options
-        .stream
-        .then(|| ScanStream::start(scenario.robot.mount()));
+    let mut stream = options.stream.then(|| {
+        let twin = taped.inner().twin();
+        // The ring's transducers, when the run fires it (its reading is then recorded).
+        let transducers = match (&scenario.sonar, twin.sonar()) {
+            (Some(_), Some(ring)) => (0..ring.len()).filter_map(|k| ring.transducer(k)).collect(),
+            _ => Vec::new(),
+        };
+        ScanStream::start(&scenario, std::sync::Arc::clone(twin.map()), transducers)
+    });
     // The tape's exchanges to the stream, as they are noted; and for the live view, the truth
     // at each scan, noted as the scan comes back.
     let tape = stream.as_ref().map(ScanStream::tape_feed);
@@ -402,16 +410,17 @@ pub fn run_scenario(
             if let Some(tape) = &tape {
                 tape.exchange(exchange);
             }
-            if let (Some(truths), robot::replay::Answer::Scan { scan: Some(scan) }) =
-                (&truths, &exchange.answer)
-            {
-                let truth = twin
-                    .true_pose_at(scan.stamp)
-                    .unwrap_or_else(|| twin.true_pose());
-                truths
-                    .lock()
-                    .unwrap_or_else(|e| e.into_inner())
-                    .insert(scan.stamp, truth);
+            if let robot::replay::Answer::Scan { scan: Some(scan) } = &exchange.answer {
+                let (truth, frame) = truth_at(twin, scan.stamp);
+                if let Some(tape) = &tape {
+                    tape.truth(scan.stamp, truth, frame);
+                }
+                if let Some(truths) = &truths {
+                    truths
+                        .lock()
+                        .unwrap_or_else(|e| e.into_inner())
+                        .insert(scan.stamp, truth);
+                }
             }
         });
     }
@@ -454,18 +463,14 @@ pub fn run_scenario(
     let scans: Vec<ScanRecord> = kept
         .into_iter()
         .map(|(scan, odometry, scene)| {
-            let truth = robot
-                .true_pose_at(scan.stamp)
-                .unwrap_or_else(|| robot.true_pose());
-            let frame = robot
-                .laser_frame_at(scan.stamp)
-                .unwrap_or_else(|| robot.twin().laser().frame_on(truth));
+            let (truth, frame) = truth_at(&robot, scan.stamp);
             ScanRecord {
                 scan,
                 odometry,
                 truth,
                 frame,
                 scene,
+                after_exchanges: None,
             }
         })
         .collect();
@@ -491,7 +496,7 @@ pub fn run_scenario(
     })?;
     let twin = robot.twin();
     let wall_seconds = started.elapsed().as_secs_f64();
-    Ok(RunRecord {
+    let mut record = RunRecord {
         scenario: scenario.name.clone(),
         seed: scenario.seed,
         scans,
@@ -511,9 +516,23 @@ pub fn run_scenario(
         reconstruction,
         tape,
         decisions,
-        streamed: stream.map(ScanStream::finish),
+        streamed: None,
         world_map,
-    })
+    };
+    record.streamed = stream.map(|stream| stream.finish(&mut record, &scenario));
+    Ok(record)
+}
+
+/// The twin's true pose of the base and frame of the laser at `stamp` (its pose now, for a
+/// stamp it has not simulated).
+fn truth_at(robot: &SimRobot, stamp: Stamp) -> (robot::Pose2, crate::devices::laser::LaserFrame) {
+    let truth = robot
+        .true_pose_at(stamp)
+        .unwrap_or_else(|| robot.true_pose());
+    let frame = robot
+        .laser_frame_at(stamp)
+        .unwrap_or_else(|| robot.twin().laser().frame_on(truth));
+    (truth, frame)
 }
 
 /// Ticks between two status polls while the head moves.

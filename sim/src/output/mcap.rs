@@ -15,13 +15,19 @@
 //! | `/rosout` | `rcl_interfaces/Log` | each serial link event (a drive) | |
 //! | `/hardware/tape` | `std_msgs/String` | every call through the hardware contract and its answer, as JSON | |
 //!
+//! The messages come in the order the run's events happened: `/tf_static` first; then each
+//! exchange of the tape, and each kept scan's topics after the exchanges noted before the tour
+//! handed it over ([`RecordedScan::after`]; a scan not placed among them comes before the
+//! tape); then `/estimate`, the sonar, `/points` and `/rosout`. A run writes the file this way
+//! as it goes ([`super::ScanStream`]), the same bytes as from its record afterwards.
+//!
 //! Frames follow REP-105: `odom` starts at the start pose, so the twin's odometry (world frame,
 //! starting at the start pose) is `odom` → `base_link` as it is, and the truth enters only as
 //! `map` → `odom`. Every stamp is the robot's time (simulated in the twin).
 
 use crate::record::{Placement, SonarRecord};
 use robot::hardware::{HeadAngles, LaserScan, SPEED_OF_SOUND, echo_distance_m};
-use robot::logs::mcap::Recorder;
+use robot::logs::mcap::{RecordError, Recorder};
 use robot::logs::ros2::{
     ClockMsg, Encoded, Header, LaserScanMsg, LogMsg, OdometryMsg, PointCloudMsg, PoseStampedMsg,
     RangeMsg, TfMessage, Transform, TransformStamped,
@@ -39,6 +45,9 @@ pub struct RecordedScan<'a> {
     pub odometry: Pose2,
     /// The true pose at its stamp, in the twin.
     pub truth: Option<Pose2>,
+    /// How many of the tape's exchanges were noted before the tour handed the scan over: its
+    /// topics are written after them (`None`: before the tape).
+    pub after: Option<usize>,
 }
 
 /// Everything a recording holds.
@@ -60,8 +69,6 @@ pub struct Recording<'a> {
     pub link_events: Vec<(Stamp, String, String)>,
     /// The controller's calls through the hardware contract and their answers, for a replay.
     pub tape: &'a [robot::replay::Exchange],
-    /// The same as JSON, one string per exchange, when already written (else written here).
-    pub tape_json: Option<&'a [String]>,
 }
 
 /// Writes `recording` to `path`; returns the number of messages written.
@@ -197,95 +204,174 @@ pub fn scan_topics(
     out
 }
 
-fn write(path: &Path, r: &Recording) -> Result<u32, robot::logs::mcap::RecordError> {
-    let mut rec = Recorder::create(path)?;
+fn write(path: &Path, r: &Recording) -> Result<u32, RecordError> {
     let transducers = r.sonar.map_or(&[][..], |(s, _)| s.transducers.as_slice());
-    rec.write(
-        "/tf_static",
-        Stamp::ZERO,
-        &static_transforms(&r.mount, transducers),
-    )?;
-    // Scans with the poses at their stamps, and the estimate, in time order.
-    let mut estimate = r.estimate.iter().peekable();
-    let mut last = Stamp::ZERO;
-    for s in &r.scans {
+    let mut m = McapStream::start(Recorder::create(path)?, r.mount, r.scan_time_s, transducers)?;
+    let mut scans = r.scans.iter().peekable();
+    for (i, exchange) in r.tape.iter().enumerate() {
+        while let Some(s) = scans.next_if(|s| s.after.is_none_or(|n| n <= i)) {
+            m.scan(s)?;
+        }
+        m.exchange(exchange, &tape_json(exchange))?;
+    }
+    for s in scans {
+        m.scan(s)?;
+    }
+    m.end(r)?;
+    let n = m.rec.messages();
+    m.rec.finish()?;
+    Ok(n)
+}
+
+/// `run.mcap` being written in its order (see the module's documentation), into `W`.
+pub(crate) struct McapStream<W: std::io::Write + std::io::Seek> {
+    rec: Recorder<W>,
+    mount: LaserMount,
+    scan_time_s: f64,
+    /// The stamp of the last exchange written (one without a stamp of its own is written at it).
+    tape_at: Stamp,
+    /// Scans and exchanges written.
+    scans: usize,
+    exchanges: usize,
+    /// The last stamp of a scan written.
+    last: Stamp,
+}
+
+impl<W: std::io::Write + std::io::Seek> std::fmt::Debug for McapStream<W> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "McapStream({} scans, {} exchanges, {} messages)",
+            self.scans,
+            self.exchanges,
+            self.rec.messages()
+        )
+    }
+}
+
+impl<W: std::io::Write + std::io::Seek> McapStream<W> {
+    /// Starts the recording with `/tf_static`: the laser on `mount`, the sonar `transducers`.
+    pub(crate) fn start(
+        mut rec: Recorder<W>,
+        mount: LaserMount,
+        scan_time_s: f64,
+        transducers: &[Pose2],
+    ) -> Result<Self, RecordError> {
+        rec.write(
+            "/tf_static",
+            Stamp::ZERO,
+            &static_transforms(&mount, transducers),
+        )?;
+        Ok(McapStream {
+            rec,
+            mount,
+            scan_time_s,
+            tape_at: Stamp::ZERO,
+            scans: 0,
+            exchanges: 0,
+            last: Stamp::ZERO,
+        })
+    }
+
+    /// A kept scan's topics, at its stamp.
+    pub(crate) fn scan(&mut self, s: &RecordedScan) -> Result<(), RecordError> {
         let t = s.scan.stamp;
-        while let Some((at, pose)) = estimate.next_if(|(at, _)| *at < t) {
+        for (topic, msg) in scan_topics(s, &self.mount, self.scan_time_s) {
+            self.rec.write_encoded(topic, t, &msg)?;
+        }
+        self.last = self.last.max(t);
+        self.scans += 1;
+        Ok(())
+    }
+
+    /// An exchange of the tape, `json` its text, at its answer's stamp (or the last stamp
+    /// before it).
+    pub(crate) fn exchange(
+        &mut self,
+        exchange: &robot::replay::Exchange,
+        json: &str,
+    ) -> Result<(), RecordError> {
+        self.tape_at = exchange
+            .stamp()
+            .map_or(self.tape_at, |s| s.max(self.tape_at));
+        self.exchanges += 1;
+        self.rec
+            .write(robot::logs::mcap::TAPE_TOPIC, self.tape_at, json)
+    }
+
+    /// Scans and exchanges written so far.
+    pub(crate) fn written(&self) -> (usize, usize) {
+        (self.scans, self.exchanges)
+    }
+
+    /// What comes after the run's events: the estimate, the sonar ring's reading, the 3D
+    /// model's points and the serial link's events, from `r` (whose scans and tape were
+    /// written).
+    fn end(&mut self, r: &Recording) -> Result<(), RecordError> {
+        let rec = &mut self.rec;
+        let mut last = self.last;
+        for (at, pose) in &r.estimate {
             rec.write("/estimate", *at, &estimate_msg(*at, *pose))?;
+            last = last.max(*at);
         }
-        for (topic, msg) in scan_topics(s, &r.mount, r.scan_time_s) {
-            rec.write_encoded(topic, t, &msg)?;
+        if let Some((sonar, [min, max])) = r.sonar {
+            let e = &sonar.echoes;
+            for i in 0..e.times.len() {
+                let n = e.sequence[i];
+                let at = e.measured[i].unwrap_or(e.stamp);
+                let range =
+                    echo_distance_m(e.times[i], SPEED_OF_SOUND).map_or(f32::INFINITY, |d| d as f32);
+                rec.write(
+                    &format!("/sonar/{n}"),
+                    at,
+                    &RangeMsg {
+                        header: Header::new(at, &format!("sonar_{n}")),
+                        radiation_type: RangeMsg::ULTRASOUND,
+                        field_of_view: sonar.cone as f32,
+                        min_range: min as f32,
+                        max_range: max as f32,
+                        range,
+                        variance: 0.0,
+                    },
+                )?;
+            }
         }
-        last = last.max(t);
-    }
-    for (at, pose) in estimate {
-        rec.write("/estimate", *at, &estimate_msg(*at, *pose))?;
-        last = last.max(*at);
-    }
-    if let Some((sonar, [min, max])) = r.sonar {
-        let e = &sonar.echoes;
-        for i in 0..e.times.len() {
-            let n = e.sequence[i];
-            let at = e.measured[i].unwrap_or(e.stamp);
-            let range =
-                echo_distance_m(e.times[i], SPEED_OF_SOUND).map_or(f32::INFINITY, |d| d as f32);
+        if let Some((placement, points)) = r.points {
+            let frame = if placement == Placement::Odometry {
+                "odom"
+            } else {
+                "map"
+            };
             rec.write(
-                &format!("/sonar/{n}"),
-                at,
-                &RangeMsg {
-                    header: Header::new(at, &format!("sonar_{n}")),
-                    radiation_type: RangeMsg::ULTRASOUND,
-                    field_of_view: sonar.cone as f32,
-                    min_range: min as f32,
-                    max_range: max as f32,
-                    range,
-                    variance: 0.0,
+                "/points",
+                last,
+                &PointCloudMsg {
+                    header: Header::new(last, frame),
+                    points: points.to_vec(),
                 },
             )?;
         }
+        for (at, device, what) in &r.link_events {
+            rec.write(
+                "/rosout",
+                *at,
+                &LogMsg {
+                    stamp: *at,
+                    level: LogMsg::WARN,
+                    name: device.clone(),
+                    msg: what.clone(),
+                },
+            )?;
+        }
+        Ok(())
     }
-    if let Some((placement, points)) = r.points {
-        let frame = if placement == Placement::Odometry {
-            "odom"
-        } else {
-            "map"
-        };
-        rec.write(
-            "/points",
-            last,
-            &PointCloudMsg {
-                header: Header::new(last, frame),
-                points: points.to_vec(),
-            },
-        )?;
+
+    /// Ends the recording with the rest of `r` (its scans and tape written already): the
+    /// writer, the file complete.
+    pub(crate) fn finish(mut self, r: &Recording) -> Result<W, RecordError> {
+        self.end(r)?;
+        self.rec.finish_into()
     }
-    for (at, device, what) in &r.link_events {
-        rec.write(
-            "/rosout",
-            *at,
-            &LogMsg {
-                stamp: *at,
-                level: LogMsg::WARN,
-                name: device.clone(),
-                msg: what.clone(),
-            },
-        )?;
-    }
-    // The tape, each exchange at its answer's stamp (or the last stamp before it).
-    let mut at = Stamp::ZERO;
-    let written = r.tape_json.filter(|json| json.len() == r.tape.len());
-    for (i, exchange) in r.tape.iter().enumerate() {
-        at = exchange.stamp().map_or(at, |s| s.max(at));
-        // The JSON built during the run, borrowed; built here when the run did not.
-        let json: std::borrow::Cow<'_, str> = match written {
-            Some(json) => json[i].as_str().into(),
-            None => tape_json(exchange).into(),
-        };
-        rec.write(robot::logs::mcap::TAPE_TOPIC, at, &*json)?;
-    }
-    let n = rec.messages();
-    rec.finish()?;
-    Ok(n)
 }
 
 /// An exchange of the tape as `/hardware/tape` carries it.

@@ -56,7 +56,7 @@ pub fn write_decisions(
     out.flush()
 }
 pub use summary::{LocalisationSummary, Summary, estimate_errors};
-pub use svg::write_map_svg;
+pub use svg::{new_scan_dots, write_map_svg};
 pub use tilted::{last_tilted, write_tilted_svg};
 pub use tum::{read_tum, write_tum};
 
@@ -87,7 +87,7 @@ fn level_scans(record: &RunRecord, scenario: &Scenario) -> Vec<(robot::Pose2, Ra
 }
 
 /// A run as the topics of `run.mcap`.
-fn recording<'a>(record: &'a RunRecord, scenario: &Scenario) -> Recording<'a> {
+pub(crate) fn recording<'a>(record: &'a RunRecord, scenario: &Scenario) -> Recording<'a> {
     let robot = &scenario.robot;
     Recording {
         mount: robot.mount(),
@@ -99,6 +99,7 @@ fn recording<'a>(record: &'a RunRecord, scenario: &Scenario) -> Recording<'a> {
                 scan: &s.scan,
                 odometry: s.odometry,
                 truth: Some(s.truth),
+                after: s.after_exchanges,
             })
             .collect(),
         estimate: record
@@ -118,7 +119,6 @@ fn recording<'a>(record: &'a RunRecord, scenario: &Scenario) -> Recording<'a> {
         }),
         link_events: Vec::new(),
         tape: &record.tape,
-        tape_json: record.streamed.as_ref().map(|s| s.tape_json.as_slice()),
     }
 }
 
@@ -204,7 +204,16 @@ pub fn write_all(record: &RunRecord, scenario: &Scenario, dir: &Path) -> std::io
     let map = &*record.world_map;
     let pictures = || -> std::io::Result<Vec<PathBuf>> {
         let mut files = vec![path("map.svg"), path("world.json")];
-        write_map_svg(&files[0], record, &scenario.world, map)?;
+        // The scans' points drawn during the run, else drawn now.
+        let drawn_now;
+        let dots = match record.streamed.as_ref().and_then(|s| s.dots.as_ref()) {
+            Some(dots) => dots,
+            None => {
+                drawn_now = svg::scan_dots(record, &scenario.world);
+                &drawn_now
+            }
+        };
+        write_map_svg(&files[0], record, &scenario.world, dots)?;
         write_world_json(&files[1], scenario, map)?;
         if let Some(scan) = last_tilted(record) {
             files.push(path("tilted-scan.svg"));
@@ -219,19 +228,34 @@ pub fn write_all(record: &RunRecord, scenario: &Scenario, dir: &Path) -> std::io
             level_scans(record, scenario).iter().map(|(p, s)| (*p, s)),
         ),
     };
-    let recording_file = || {
-        write_mcap(&path("run.mcap"), &recording(record, scenario)).map(|_| vec![path("run.mcap")])
+    let recording_file = || -> std::io::Result<Vec<PathBuf>> {
+        let file = path("run.mcap");
+        match record.streamed.as_ref().and_then(|s| s.run_mcap.as_ref()) {
+            Some(bytes) => robot::logs::write_file(&file, bytes)?,
+            None => {
+                write_mcap(&file, &recording(record, scenario))?;
+            }
+        }
+        Ok(vec![file])
     };
     let small_files = || -> std::io::Result<Vec<PathBuf>> {
         let mut files = vec![path("truth.tum"), path("odometry.tum")];
-        write_tum(
-            &files[0],
-            record.scans.iter().map(|r| (r.scan.stamp, r.truth)),
-        )?;
-        write_tum(
-            &files[1],
-            record.scans.iter().map(|r| (r.scan.stamp, r.odometry)),
-        )?;
+        match record.streamed.as_ref().and_then(|s| s.tum.as_ref()) {
+            Some([truth, odometry]) => {
+                robot::logs::write_file(&files[0], truth)?;
+                robot::logs::write_file(&files[1], odometry)?;
+            }
+            None => {
+                write_tum(
+                    &files[0],
+                    record.scans.iter().map(|r| (r.scan.stamp, r.truth)),
+                )?;
+                write_tum(
+                    &files[1],
+                    record.scans.iter().map(|r| (r.scan.stamp, r.odometry)),
+                )?;
+            }
+        }
         if let Some(loc) = &record.localisation {
             files.push(path("estimate.tum"));
             write_tum(

@@ -1,19 +1,28 @@
 //! The files a run can write while it goes on: a thread of its own takes each scan as the tour
 //! keeps it, and each exchange through the hardware contract as the tape notes it, and builds
-//! `map.pgm`'s occupancy grid, `scans.jsonl`'s lines and the tape's JSON for `run.mcap`, so they
-//! are ready when the simulation ends instead of starting then. The same bytes, to the last one,
-//! as those built from the run's record afterwards: the same items reach the same builders in
-//! the same order.
+//! `map.pgm`'s occupancy grid, `scans.jsonl`'s lines, `run.mcap` (but for what follows the run's
+//! events), `truth.tum`, `odometry.tum` and `map.svg`'s scan points, so they are ready when the
+//! simulation ends instead of starting then. The same bytes, to the last one, as those built
+//! from the run's record afterwards: the same items reach the same builders in the same order,
+//! and what depends on the twin's truth is kept only if each kept scan's truth, noted as the
+//! scan came back, is the one the record holds.
 
 use super::grid::grid_pose;
+use super::mcap::{McapStream, RecordedScan};
 use super::scans::{ScanLine, push_scan_line};
-use crate::record::Streamed;
-use robot::Pose2;
+use super::tum::{TUM_HEADER, write_tum_line};
+use crate::config::Scenario;
+use crate::devices::laser::LaserFrame;
+use crate::record::{RunRecord, ScanDots, Streamed};
+use crate::world::WorldMap;
 use robot::control::SceneTag;
 use robot::hardware::LaserScan;
 use robot::localization::{GridBuilder, GridConfig, RangeScan};
+use robot::logs::mcap::Recorder;
 use robot::mount::LaserMount;
 use robot::replay::Exchange;
+use robot::{Pose2, Stamp};
+use std::io::Cursor;
 use std::sync::mpsc::{Receiver, Sender};
 use std::sync::{Arc, Mutex};
 
@@ -27,13 +36,16 @@ enum Item {
     Grid(Pose2, LaserScan),
     /// An exchange the tape noted: its JSON.
     Tape(Box<Exchange>),
+    /// The twin's true pose and laser frame at a scan's stamp, as the scan came back: what the
+    /// scan is drawn from in `map.svg`, if the tour keeps it.
+    Truth(Stamp, Pose2, LaserFrame),
     /// The run is over.
     End,
 }
 
 /// Items handed over at once. Each hand-over wakes the builder, a system call on the
-/// simulation's thread: 128 items make about 55 in the polled lab tour (892 scans, 5,445
-/// exchanges), where 32 made 220 and cost the simulation 1–2 ms more (the README's *Whole
+/// simulation's thread: 128 items make about 63 in the polled lab tour (892 scans, 5,445
+/// exchanges), where 32 made 250 and cost the simulation 1–2 ms more (the README's *Whole
 /// process against simulation*). The builder's last batch, after the simulation, is at most
 /// this long.
 const BATCH: usize = 128;
@@ -87,7 +99,28 @@ impl Feed {
 pub struct ScanStream {
     mount: LaserMount,
     feed: Feed,
-    builder: std::thread::JoinHandle<Streamed>,
+    builder: std::thread::JoinHandle<Built>,
+}
+
+/// What the builder made of the items: the files' parts, and what each kept scan was drawn and
+/// recorded with.
+#[derive(Debug)]
+struct Built {
+    grid: GridBuilder,
+    scan_lines: Vec<u8>,
+    /// Exchanges handed over.
+    exchanges: usize,
+    /// The last exchange's JSON.
+    json: Vec<u8>,
+    /// Given up (`None`) at the first kept scan whose truth was not noted.
+    dots: Option<ScanDots>,
+    recording: Option<McapStream<Cursor<Vec<u8>>>>,
+    /// `truth.tum` and `odometry.tum`.
+    tum: [Vec<u8>; 2],
+    /// The sonar transducers in the recording's `/tf_static`.
+    transducers: Vec<Pose2>,
+    /// Each kept scan's place among the exchanges, true pose and laser frame, as drawn.
+    noted: Vec<(usize, Pose2, LaserFrame)>,
 }
 
 /// The tape's side of a [`ScanStream`]: give it each exchange as the tape notes it
@@ -100,31 +133,50 @@ impl TapeFeed {
     pub fn exchange(&self, exchange: &Exchange) {
         self.0.hand(Item::Tape(Box::new(exchange.clone())));
     }
+
+    /// The true pose and laser frame at the stamp of a scan that just came back.
+    pub fn truth(&self, stamp: Stamp, truth: Pose2, frame: LaserFrame) {
+        self.0.hand(Item::Truth(stamp, truth, frame));
+    }
 }
 
 impl ScanStream {
-    /// Starts the builder for a laser on `mount`.
-    pub fn start(mount: LaserMount) -> Self {
+    /// Starts the builder for `scenario`'s run in the world of `map`, whose robot's sonar
+    /// `transducers` (if it fires them) are in the recording.
+    pub fn start(scenario: &Scenario, map: Arc<WorldMap>, transducers: Vec<Pose2>) -> Self {
         let (feed, batches) = std::sync::mpsc::channel::<Vec<Item>>();
         let (hand_back, back) = std::sync::mpsc::channel::<Vec<Item>>();
-        let on_thread = mount;
+        let mount = scenario.robot.mount();
+        let dots = super::new_scan_dots(&scenario.world, map);
+        let scan_time_s = super::scan_period_s(&scenario.robot.laser);
         let builder = std::thread::spawn(move || {
-            let mut grid = GridBuilder::new(GridConfig::default());
-            let (mut scan_lines, mut tape_json) = (Vec::new(), Vec::new());
+            let mut built = Built {
+                grid: GridBuilder::new(GridConfig::default()),
+                scan_lines: Vec::new(),
+                exchanges: 0,
+                json: Vec::new(),
+                dots: Some(dots),
+                recording: Recorder::new(Cursor::new(Vec::new()))
+                    .and_then(|rec| McapStream::start(rec, mount, scan_time_s, &transducers))
+                    .ok(),
+                tum: [TUM_HEADER.to_vec(), TUM_HEADER.to_vec()],
+                transducers,
+                noted: Vec::new(),
+            };
+            // The truths noted and not yet matched with a kept scan, oldest first.
+            let mut truths = std::collections::VecDeque::new();
             'batches: for batch in batches {
                 let mut ended = false;
                 for item in &batch {
                     match item {
-                        Item::Kept(scan, odometry, scene) => push_scan_line(
-                            &mut scan_lines,
-                            &ScanLine::new(scan, *odometry, &on_thread, *scene),
-                        ),
+                        Item::Kept(scan, odometry, scene) => {
+                            built.kept(&mount, scan, *odometry, *scene, &mut truths);
+                        }
+                        Item::Truth(at, truth, frame) => truths.push_back((*at, *truth, *frame)),
                         Item::Grid(laser, scan) => {
-                            grid.push(*laser, &RangeScan::from(scan));
+                            built.grid.push(*laser, &RangeScan::from(scan));
                         }
-                        Item::Tape(exchange) => {
-                            tape_json.push(super::mcap::tape_json(exchange));
-                        }
+                        Item::Tape(exchange) => built.exchange(exchange),
                         Item::End => {
                             ended = true;
                             break;
@@ -136,11 +188,7 @@ impl ScanStream {
                     break 'batches;
                 }
             }
-            Streamed {
-                grid,
-                scan_lines,
-                tape_json,
-            }
+            built
         });
         ScanStream {
             mount,
@@ -172,15 +220,111 @@ impl ScanStream {
     }
 
     /// Everything built from the items handed over, once the builder is done (a tape feed
-    /// still held elsewhere hands nothing more to it).
-    pub fn finish(self) -> Streamed {
+    /// still held elsewhere hands nothing more to it), for `record`, the run's record (which
+    /// learns where its scans came among the exchanges): the recording is ended with the rest of
+    /// the record. The scan points and the recording are kept only if every kept scan was drawn
+    /// and recorded from the very truth the record holds.
+    pub fn finish(self, record: &mut RunRecord, scenario: &Scenario) -> Streamed {
         {
             let mut feed = self.feed.0.lock().unwrap_or_else(|e| e.into_inner());
             feed.items.push(Item::End);
             Feed::hand_over(&mut feed);
         }
-        self.builder
+        let built = self
+            .builder
             .join()
-            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+        let same = built.noted.len() == record.scans.len()
+            && built
+                .noted
+                .iter()
+                .zip(&record.scans)
+                .all(|(&(_, truth, frame), r)| truth == r.truth && frame == r.frame);
+        if same {
+            for (&(after, ..), r) in built.noted.iter().zip(&mut record.scans) {
+                r.after_exchanges = Some(after);
+            }
+        }
+        let transducers = record.sonar.as_ref().map_or(&[][..], |s| &s.transducers);
+        let run_mcap = built
+            .recording
+            .filter(|m| {
+                same && m.written() == (record.scans.len(), record.tape.len())
+                    && built.transducers == transducers
+            })
+            .and_then(|m| m.finish(&super::recording(record, scenario)).ok())
+            .map(Cursor::into_inner);
+        Streamed {
+            grid: built.grid,
+            scan_lines: built.scan_lines,
+            dots: built.dots.filter(|_| same),
+            run_mcap,
+            tum: same.then_some(built.tum),
+        }
+    }
+}
+
+impl Built {
+    /// An exchange of the tape, into the recording.
+    fn exchange(&mut self, exchange: &Exchange) {
+        self.exchanges += 1;
+        let Some(recording) = &mut self.recording else {
+            return;
+        };
+        // Written through one buffer: no allocation an exchange once it has grown (the
+        // simulation's thread allocates beside this one, and shares the allocator's locks).
+        self.json.clear();
+        let written = serde_json::to_writer(&mut self.json, exchange)
+            .ok()
+            .and_then(|()| std::str::from_utf8(&self.json).ok())
+            .map(|json| recording.exchange(exchange, json));
+        if !matches!(written, Some(Ok(()))) {
+            // Written afterwards, whole.
+            self.recording = None;
+        }
+    }
+
+    /// A kept scan: its line of `scans.jsonl`, its points and its topics, drawn and recorded
+    /// from the truth noted at its stamp (the older truths dropped).
+    fn kept(
+        &mut self,
+        mount: &LaserMount,
+        scan: &LaserScan,
+        odometry: Pose2,
+        scene: Option<SceneTag>,
+        truths: &mut std::collections::VecDeque<(Stamp, Pose2, LaserFrame)>,
+    ) {
+        push_scan_line(
+            &mut self.scan_lines,
+            &ScanLine::new(scan, odometry, mount, scene),
+        );
+        while truths.front().is_some_and(|t| t.0 < scan.stamp) {
+            truths.pop_front();
+        }
+        let Some(&(_, truth, frame)) = truths.front().filter(|t| t.0 == scan.stamp) else {
+            // Not drawn nor recorded from the truth: both are made afterwards.
+            self.dots = None;
+            self.recording = None;
+            return;
+        };
+        let after = self.exchanges;
+        self.noted.push((after, truth, frame));
+        if let Some(dots) = &mut self.dots {
+            dots.add(scan, &frame, truth, odometry);
+        }
+        for (tum, pose) in self.tum.iter_mut().zip([truth, odometry]) {
+            write_tum_line(tum, scan.stamp, pose).expect("a vector takes every byte");
+        }
+        let recorded = RecordedScan {
+            scan,
+            odometry,
+            truth: Some(truth),
+            after: Some(after),
+        };
+        if let Some(recording) = &mut self.recording
+            && recording.scan(&recorded).is_err()
+        {
+            self.recording = None;
+        }
     }
 }

@@ -5,11 +5,10 @@ pub(super) use super::figure::xml_escape;
 use super::figure::{Layers, Plan, Swatch, open_svg};
 use super::summary::estimate_errors;
 use crate::config::{Material, WorldDescription};
-use crate::devices::laser::LaserFrame;
 use crate::record::RunRecord;
-use crate::world::{PointKind, PointKinds, WorldMap};
+use crate::record::dots::{DotLayer, Drawn, ScanDots, cell_of, cells_within, push_move};
+use crate::world::PointKind;
 use robot::Pose2;
-use robot::hardware::LaserScan;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -19,7 +18,9 @@ const SCALE: f64 = 60.0;
 const MARGIN: f64 = 0.6;
 /// Margin around the plan view, pixels.
 const PAD: f64 = 12.0;
-/// Most scan points drawn per projection (the rest are thinned out evenly).
+/// Half-pixel cells a metre: each scan point is drawn on one, each cell once.
+const CELLS_PER_M: f64 = 2.0 * SCALE;
+/// Most points of the estimate's map drawn (the rest are thinned out evenly).
 const MAX_POINTS: usize = 60_000;
 /// Width of one legend column, pixels.
 const LEGEND_COLUMN: f64 = 300.0;
@@ -92,12 +93,12 @@ pub fn write_map_svg(
     path: &Path,
     record: &RunRecord,
     world: &WorldDescription,
-    map: &WorldMap,
+    dots: &ScanDots,
 ) -> std::io::Result<()> {
-    robot::logs::write_file(path, render(record, world, map))
+    robot::logs::write_file(path, render(record, world, dots))
 }
 
-fn render(record: &RunRecord, world: &WorldDescription, map: &WorldMap) -> String {
+fn render(record: &RunRecord, world: &WorldDescription, dots: &ScanDots) -> String {
     let odometry: Vec<Pose2> =
         std::iter::once(record.true_path.first().map_or(world.start, |p| p.1))
             .chain(record.scans.iter().map(|r| r.odometry))
@@ -118,9 +119,17 @@ fn render(record: &RunRecord, world: &WorldDescription, map: &WorldMap) -> Strin
             max = [max[0].max(p.x + 0.4), max[1].max(p.y + 0.4)];
         }
     }
+    // The left and top edges on the scan points' lattice (a cell's dot then sits on a whole
+    // half pixel), outside the margin.
     let plan = Plan {
-        min: [min[0] - MARGIN, min[1] - MARGIN],
-        max: [max[0] + MARGIN, max[1] + MARGIN],
+        min: [
+            ((min[0] - MARGIN) * CELLS_PER_M).floor() / CELLS_PER_M,
+            min[1] - MARGIN,
+        ],
+        max: [
+            max[0] + MARGIN,
+            ((max[1] + MARGIN) * CELLS_PER_M).ceil() / CELLS_PER_M,
+        ],
         origin: [PAD + Plan::LEFT, PAD + Plan::ABOVE],
         scale: SCALE,
     };
@@ -131,28 +140,49 @@ fn render(record: &RunRecord, world: &WorldDescription, map: &WorldMap) -> Strin
     // Scans drawn from the true pose (what is there, with the laser's noise) and from odometry.
     // A point where there is no surface — a mirror image off glass or metal, or an outlier — is
     // a ghost, drawn apart; so are the floor hits of a tilted laser.
-    let mut scans = ScanDots::new(&plan);
-    draw_scan_points(record, map, &mut scans);
-    let mut estimated = Dots::new(&plan);
+    let mut beyond = (String::new(), 0usize);
+    let drifted = framed(&plan, &dots.drifted, DRIFTED, &mut beyond);
+    let seen = framed(
+        &plan,
+        &dots.seen,
+        point_colour(PointKind::Surface),
+        &mut beyond,
+    );
+    let floor = framed(
+        &plan,
+        &dots.floor,
+        point_colour(PointKind::Floor),
+        &mut beyond,
+    );
+    let ghosts = framed(
+        &plan,
+        &dots.ghosts,
+        point_colour(PointKind::Ghost),
+        &mut beyond,
+    );
+    for _ in 0..dots.unplaced {
+        mark_beyond(&plan, f64::NAN, f64::NAN, &mut beyond);
+    }
+    let mut placed = DotLayer::default();
     if let Some(loc) = &record.localisation {
+        let mut drawn = Drawn::new(
+            cells_within(plan.min[0], plan.max[0], CELLS_PER_M),
+            cells_within(plan.min[1], plan.max[1], CELLS_PER_M),
+        );
         let stride = loc.map.len().div_ceil(MAX_POINTS).max(1);
         for p in loc.map.iter().step_by(stride) {
-            estimated.add(p[0], p[1]);
+            match cell_of(p[0], p[1], CELLS_PER_M) {
+                Some(cell) => {
+                    if let Some(inside) = drawn.insert(cell) {
+                        placed.push(cell, inside);
+                    }
+                }
+                None => mark_beyond(&plan, p[0], p[1], &mut beyond),
+            }
         }
     }
-    let mut beyond = String::new();
-    let mut beyond_count = 0usize;
-    let mut coloured = |colour: &str, dots: Dots| {
-        let (body, out, count) = dots.finish(colour);
-        beyond.push_str(&out);
-        beyond_count += count;
-        body
-    };
-    let drifted = coloured(DRIFTED, scans.drifted);
-    let seen = coloured(point_colour(PointKind::Surface), scans.seen);
-    let floor = coloured(point_colour(PointKind::Floor), scans.floor);
-    let ghosts = coloured(point_colour(PointKind::Ghost), scans.ghosts);
-    let estimated = coloured(ESTIMATE_SCANS, estimated);
+    let estimated = framed(&plan, &placed, ESTIMATE_SCANS, &mut beyond);
+    let (beyond, beyond_count) = beyond;
     layers.add(
         "scans-odometry",
         "scans placed at odometry",
@@ -335,245 +365,84 @@ fn render(record: &RunRecord, world: &WorldDescription, map: &WorldMap) -> Strin
     s
 }
 
-/// The scans' points being drawn, sorted by what they hit.
-struct ScanDots {
-    /// Placed at the true pose, on a surface.
-    seen: Dots,
-    /// Placed at the true pose, on the floor.
-    floor: Dots,
-    /// Placed at the true pose, far from every surface.
-    ghosts: Dots,
-    /// Placed at the odometry pose.
-    drifted: Dots,
-}
-
-impl ScanDots {
-    fn new(plan: &Plan) -> Self {
-        ScanDots {
-            seen: Dots::new(plan),
-            floor: Dots::new(plan),
-            ghosts: Dots::new(plan),
-            drifted: Dots::new(plan),
-        }
-    }
-}
-
-/// A layer of dots being drawn, point by point, as they come: each on a half-pixel grid and
-/// drawn once (a 2-pixel dot hides any finer place, and a picture of a long run then costs what
-/// its area does, not what its scans do); a point beyond the frame marked at its edge.
-struct Dots {
-    plan: Plan,
-    /// The path data, ASCII (made text once, at the end).
-    d: Vec<u8>,
-    drawn: HalfPixels,
-    /// The marks of the points beyond the frame, and their number.
-    beyond: (String, usize),
-}
-
-impl Dots {
-    fn new(plan: &Plan) -> Self {
-        Dots {
-            plan: *plan,
-            d: Vec::new(),
-            drawn: HalfPixels::new(plan),
-            beyond: (String::new(), 0),
-        }
-    }
-
-    /// Draws the point at `(x, y)` metres.
-    fn add(&mut self, x: f64, y: f64) {
-        let plan = &self.plan;
-        if plan.contains(x, y) {
-            // In the frame: both half-pixel numbers are positive, so adding a half and
-            // truncating rounds.
-            let (x, y) = (
-                (plan.x(x) * 2.0 + 0.5) as i64,
-                (plan.y(y) * 2.0 + 0.5) as i64,
-            );
-            if self.drawn.insert(x, y) {
-                push_dot(&mut self.d, x, y);
-            }
+/// `layer` in `plan`, in `colour` (nothing when it has no dot in the frame): its path data in
+/// lattice units, placed by a transform, and its cells beyond the world's rectangle that the
+/// frame holds; the others are marked at the frame's edge in `beyond`, and counted.
+fn framed(plan: &Plan, layer: &DotLayer, colour: &str, beyond: &mut (String, usize)) -> String {
+    // The frame's left and top edges lie on the lattice.
+    let left = (plan.min[0] * CELLS_PER_M).round();
+    let top = (plan.max[1] * CELLS_PER_M).round();
+    let (columns, rows) = (
+        cells_within(plan.min[0], plan.max[0], CELLS_PER_M),
+        cells_within(plan.min[1], plan.max[1], CELLS_PER_M),
+    );
+    let mut more = Vec::new();
+    for &(i, j) in &layer.beyond {
+        if columns.contains(&i) && rows.contains(&j) {
+            push_move(&mut more, b'M', i, -j);
         } else {
-            let (x, y) = plan.clamped(x, y);
-            let beyond = &mut self.beyond.0;
-            beyond.push('M');
-            push_tenths(beyond, x);
-            beyond.push(' ');
-            push_tenths(beyond, y);
-            beyond.push_str("h0");
-            self.beyond.1 += 1;
+            mark_beyond(plan, i as f64 / CELLS_PER_M, j as f64 / CELLS_PER_M, beyond);
         }
     }
-
-    /// The layer in `colour` (nothing when no point fell in the frame), the marks of the
-    /// points beyond it, and their number.
-    fn finish(self, colour: &str) -> (String, String, usize) {
-        let mut body = String::new();
-        if !self.d.is_empty() {
-            // Pieces pushed into room made once: the path data is the picture's bulk.
-            let (open, close) = (
-                format!(r#"<g color="{colour}"><path d=""#),
-                r#"" stroke="currentColor" stroke-width="2" stroke-linecap="round" fill="none"/></g>"#,
-            );
-            let d = String::from_utf8(self.d).expect("path data is ASCII");
-            body.reserve_exact(open.len() + d.len() + close.len());
-            body.push_str(&open);
-            body.push_str(&d);
-            body.push_str(close);
-        }
-        (body, self.beyond.0, self.beyond.1)
+    if layer.d.is_empty() && more.is_empty() {
+        return String::new();
     }
+    let ascii = |d: &[u8]| {
+        std::str::from_utf8(d)
+            .map(str::to_owned)
+            .unwrap_or_default()
+    };
+    let (d, more) = (ascii(&layer.d), ascii(&more));
+    // A cell is half a pixel: its column `i` lies at `origin + (i − left) / 2`, its row `j`
+    // (written as `−j`) at `origin + (top − j) / 2`; a dot 2 pixels wide is 4 cells.
+    let open = format!(
+        r#"<g color="{colour}" transform="translate({} {}) scale(0.5)"><path d=""#,
+        plan.origin[0] - left / 2.0,
+        plan.origin[1] + top / 2.0,
+    );
+    let close =
+        r#"" stroke="currentColor" stroke-width="4" stroke-linecap="round" fill="none"/></g>"#;
+    let mut body = String::with_capacity(open.len() + d.len() + more.len() + close.len());
+    body.push_str(&open);
+    body.push_str(&d);
+    body.push_str(&more);
+    body.push_str(close);
+    body
 }
 
-/// Each beam's sine and cosine, computed again only for a scan of other angles.
-#[derive(Default)]
-struct BeamTrig {
-    angles: Option<(f64, f64)>,
-    trig: Vec<(f64, f64)>,
+/// Marks the point at `(x, y)` metres, beyond `plan`'s frame, at its edge.
+fn mark_beyond(plan: &Plan, x: f64, y: f64, (marks, count): &mut (String, usize)) {
+    let (x, y) = plan.clamped(x, y);
+    marks.push('M');
+    push_tenths(marks, x);
+    marks.push(' ');
+    push_tenths(marks, y);
+    marks.push_str("h0");
+    *count += 1;
 }
 
-impl BeamTrig {
-    fn of(&mut self, scan: &LaserScan) -> &[(f64, f64)] {
-        let angles = (scan.angle_min, scan.angle_increment);
-        if self.angles != Some(angles) || scan.len() != self.trig.len() {
-            self.angles = Some(angles);
-            self.trig = (0..scan.len()).map(|i| scan.angle(i).sin_cos()).collect();
-        }
-        &self.trig
-    }
-}
-
-/// The world point `range` metres along the beam of sine and cosine `(sa, ca)` from `frame`,
-/// whose axes are `(forward, left)`: sums and products.
-#[inline]
-fn beam_point(
-    frame: &LaserFrame,
-    (forward, left): ([f64; 3], [f64; 3]),
-    (sa, ca): (f64, f64),
-    range: f64,
-) -> [f64; 3] {
-    let at = |j: usize| frame.origin[j] + range * (ca * forward[j] + sa * left[j]);
-    [at(0), at(1), at(2)]
-}
-
-/// Draws every returned beam of the run (thinned to [`MAX_POINTS`]), from the laser's true 3D
-/// frame and from where odometry puts it, each as it is placed.
-fn draw_scan_points(record: &RunRecord, map: &WorldMap, out: &mut ScanDots) {
-    let total: usize = record.scans.iter().map(|r| r.scan.len()).sum();
-    let stride = total.div_ceil(MAX_POINTS).max(1);
-    let mut skip = stride;
-    let mut kinds = PointKinds::new(map);
-    let mut trig = BeamTrig::default();
+/// The scans' points of `record` drawn after the run, as [`ScanStream`](super::ScanStream)
+/// draws them while it goes on.
+pub(super) fn scan_dots(record: &RunRecord, world: &WorldDescription) -> ScanDots {
+    let mut dots = new_scan_dots(world, std::sync::Arc::clone(&record.world_map));
     for r in &record.scans {
-        let trig = trig.of(&r.scan);
-        let at_odometry = r.frame.carried(r.truth, r.odometry);
-        // Each frame's axes once a scan, each beam's angle once: a point is then sums and
-        // products.
-        let (axes, odometry_axes) = (r.frame.axes(), at_odometry.axes());
-        for (i, &beam) in trig.iter().enumerate() {
-            let Some(range) = r.scan.range_m(i) else {
-                continue;
-            };
-            // Every `stride`-th returned beam, counted down (no division per beam).
-            skip -= 1;
-            if skip != 0 {
-                continue;
-            }
-            skip = stride;
-            let p = beam_point(&r.frame, axes, beam, range);
-            let target = match kinds.of(p) {
-                PointKind::Ghost => &mut out.ghosts,
-                PointKind::Floor => &mut out.floor,
-                PointKind::Surface => &mut out.seen,
-            };
-            target.add(p[0], p[1]);
-            let q = beam_point(&at_odometry, odometry_axes, beam, range);
-            out.drifted.add(q[0], q[1]);
-        }
+        dots.add(&r.scan, &r.frame, r.truth, r.odometry);
     }
+    dots
 }
 
-/// Which half-pixel places of a plan's frame were drawn.
-struct HalfPixels {
-    min: [i64; 2],
-    columns: i64,
-    rows: i64,
-    bits: Vec<u64>,
-}
-
-impl HalfPixels {
-    fn new(plan: &Plan) -> Self {
-        let min = [
-            (plan.origin[0] * 2.0).floor() as i64 - 1,
-            (plan.origin[1] * 2.0).floor() as i64 - 1,
-        ];
-        let columns = (plan.width() * 2.0).ceil() as i64 + 4;
-        let rows = ((plan.max[1] - plan.min[1]) * plan.scale * 2.0).ceil() as i64 + 4;
-        let words = usize::try_from(columns * rows / 64 + 1).unwrap_or(0);
-        HalfPixels {
-            min,
-            columns,
-            rows,
-            bits: robot::memory::written_zeros(words),
-        }
-    }
-
-    /// Marks the place; whether it was new (a place outside the frame always is).
-    fn insert(&mut self, x: i64, y: i64) -> bool {
-        let (c, r) = (x - self.min[0], y - self.min[1]);
-        if !(0..self.columns).contains(&c) || !(0..self.rows).contains(&r) {
-            return true;
-        }
-        let k = (r * self.columns + c) as usize;
-        let (word, bit) = (k / 64, 1u64 << (k % 64));
-        let new = self.bits[word] & bit == 0;
-        self.bits[word] |= bit;
-        new
-    }
+/// No scan points of `world` (its map: `map`) drawn yet, on the map picture's lattice.
+pub fn new_scan_dots(
+    world: &WorldDescription,
+    map: std::sync::Arc<crate::world::WorldMap>,
+) -> ScanDots {
+    ScanDots::new(world, map, CELLS_PER_M, MARGIN)
 }
 
 /// Writes `n` in decimal, as `{}` does, without the formatter's machinery (a picture writes
 /// hundreds of thousands of them).
 fn push_whole(s: &mut String, n: u64) {
     s.push_str(itoa::Buffer::new().format(n));
-}
-
-/// Writes the path data of a dot at half-pixels `(x, y)`: `M{x} {y}h0`, each number written by
-/// [`write_halves`], straight into the path data (a picture draws tens of thousands: a buffer of
-/// its own copied in, and text checked as UTF-8 dot by dot, took a fifth of the picture's time).
-fn push_dot(s: &mut Vec<u8>, x: i64, y: i64) {
-    // 'M', two numbers of at most 20 digits, a sign and ".5" each, a space and "h0": written
-    // in room made at the end, then cut to what was written.
-    let start = s.len();
-    s.resize(start + 56, 0);
-    let buf = &mut s[start..];
-    buf[0] = b'M';
-    let mut n = 1 + write_halves(&mut buf[1..], x);
-    buf[n] = b' ';
-    n += 1;
-    n += write_halves(&mut buf[n..], y);
-    buf[n..n + 2].copy_from_slice(b"h0");
-    n += 2;
-    s.truncate(start + n);
-}
-
-/// Writes `halves / 2` into `buf` with one decimal only when it is not whole ("12", "12.5");
-/// the bytes written.
-fn write_halves(buf: &mut [u8], halves: i64) -> usize {
-    let mut n = 0;
-    if halves < 0 {
-        buf[0] = b'-';
-        n = 1;
-    }
-    let mut digits = itoa::Buffer::new();
-    let whole = digits.format(halves.unsigned_abs() / 2).as_bytes();
-    buf[n..n + whole.len()].copy_from_slice(whole);
-    n += whole.len();
-    if halves % 2 != 0 {
-        buf[n..n + 2].copy_from_slice(b".5");
-        n += 2;
-    }
-    n
 }
 
 /// Writes `x` as `format!("{x:.1}")` does, byte for byte, without the general float formatter
@@ -702,32 +571,14 @@ mod tests {
     }
 
     #[test]
-    fn whole_numbers_and_halves_are_written_as_the_formatter_writes_them() {
+    fn whole_numbers_are_written_as_the_formatter_writes_them() {
         let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(9);
-        let mut values: Vec<i64> =
-            vec![0, 1, -1, 2, -2, 9, 10, 19, 20, 99, 100, i64::MAX, i64::MIN];
-        values.extend((0..100_000).map(|_| rng.random::<i64>() >> rng.random_range(0..63)));
-        for h in values {
-            let halves = |h: i64| {
-                let mut buf = [0u8; 24];
-                let n = write_halves(&mut buf, h);
-                String::from_utf8(buf[..n].to_vec()).unwrap()
-            };
-            let s = halves(h);
-            let whole = format!("{}{}", if h < 0 { "-" } else { "" }, h.unsigned_abs() / 2);
-            let want = if h % 2 != 0 {
-                format!("{whole}.5")
-            } else {
-                whole
-            };
-            assert_eq!(s, want, "{h}");
-            let mut dot = Vec::new();
-            push_dot(&mut dot, h, -h / 3);
-            let y = halves(-h / 3);
-            assert_eq!(dot, format!("M{s} {y}h0").into_bytes(), "{h}");
-            let mut n = String::new();
-            push_whole(&mut n, h.unsigned_abs());
-            assert_eq!(n, h.unsigned_abs().to_string());
+        let mut values: Vec<u64> = vec![0, 1, 9, 10, 19, 20, 99, 100, u64::MAX];
+        values.extend((0..100_000).map(|_| rng.random::<u64>() >> rng.random_range(0..64)));
+        for n in values {
+            let mut s = String::new();
+            push_whole(&mut s, n);
+            assert_eq!(s, n.to_string());
         }
     }
 }

@@ -9,16 +9,24 @@ use std::path::Path;
 /// the heading as a unit quaternion about z with nine.
 pub fn write_tum(path: &Path, poses: impl Iterator<Item = (Stamp, Pose2)>) -> std::io::Result<()> {
     let mut out = BufWriter::new(robot::logs::create_file(path)?);
-    writeln!(out, "# t x y z qx qy qz qw")?;
+    out.write_all(TUM_HEADER)?;
     for (t, p) in poses {
-        let [qx, qy, qz, qw] = p.quaternion();
-        writeln!(
-            out,
-            "{t} {:.6} {:.6} 0.000000 {qx:.9} {qy:.9} {qz:.9} {qw:.9}",
-            p.x, p.y
-        )?;
+        write_tum_line(&mut out, t, p)?;
     }
     out.flush()
+}
+
+/// The first line of a TUM file.
+pub(super) const TUM_HEADER: &[u8] = b"# t x y z qx qy qz qw\n";
+
+/// One pose's line of a TUM file.
+pub(super) fn write_tum_line(out: &mut impl Write, t: Stamp, p: Pose2) -> std::io::Result<()> {
+    let [qx, qy, qz, qw] = p.quaternion();
+    writeln!(
+        out,
+        "{t} {:.6} {:.6} 0.000000 {qx:.9} {qy:.9} {qz:.9} {qw:.9}",
+        p.x, p.y
+    )
 }
 
 /// Reads a TUM file written by [`write_tum`] (or any tool: `t x y z qx qy qz qw`, `#` comments):
