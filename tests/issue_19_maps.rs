@@ -458,3 +458,79 @@ fn the_files_built_during_a_run_are_the_files_built_after_it() {
     }
     std::fs::remove_dir_all(&root).ok();
 }
+
+/// What depends on the twin's truth — `run.mcap`, `map.svg`'s scan points, `truth.tum` — is kept
+/// from the stream only if each kept scan's truth, noted as the scan came back, is the one the
+/// record holds: a stream told no truth, or a truth a centimetre off, leaves those files to the
+/// record, and they are the files of a run that did not stream; told the record's truths, it
+/// keeps them, and they are the record's files too.
+#[test]
+fn a_stream_keeps_what_depends_on_the_truth_only_when_it_was_the_runs() {
+    use sim::commands::run::{RunOptions, run_scenario};
+    use sim::output::{ScanStream, write_all};
+    let root = std::env::temp_dir().join(format!("twin-issue-19-truth-{}", std::process::id()));
+    let scenario = scenario("glass-door");
+    let options = RunOptions {
+        seed: Some(6),
+        ..RunOptions::default()
+    };
+    let record = run_scenario(&scenario, &options, |_, _| {}).expect("the run");
+    assert!(record.streamed.is_none() && !record.scans.is_empty());
+    let files = [
+        "run.mcap",
+        "map.svg",
+        "truth.tum",
+        "odometry.tum",
+        "scans.jsonl",
+        "map.pgm",
+    ];
+    let read = |dir: &Path| files.map(|f| std::fs::read(dir.join(f)).expect("written"));
+    for (case, told) in [
+        ("no truth", None),
+        ("a truth 1 cm off", Some(0.01)),
+        ("the run's truth", Some(0.0)),
+    ] {
+        let mut run = record.clone();
+        let mut stream =
+            ScanStream::start(&scenario, std::sync::Arc::clone(&run.world_map), Vec::new());
+        let feed = stream.tape_feed();
+        for exchange in &run.tape {
+            feed.exchange(exchange);
+        }
+        for r in &run.scans {
+            if let Some(off) = told {
+                let truth = robot::Pose2::new(r.truth.x + off, r.truth.y, r.truth.theta);
+                feed.truth(r.scan.stamp, truth, r.frame);
+            }
+            stream.kept(&r.scan, r.odometry, r.scene);
+            if r.scene.is_none() {
+                stream.grid(&r.scan, r.odometry);
+            }
+        }
+        drop(feed);
+        let built = stream.finish(&mut run, &scenario);
+        let kept = told == Some(0.0);
+        assert_eq!(built.run_mcap.is_some(), kept, "{case}: the recording");
+        assert_eq!(built.dots.is_some(), kept, "{case}: the picture's points");
+        assert_eq!(built.tum.is_some(), kept, "{case}: the trajectories");
+        assert_eq!(
+            run.scans.iter().all(|s| s.after_exchanges.is_some()),
+            kept,
+            "{case}: the scans' places among the exchanges"
+        );
+        // The same files as the record (with what the stream taught it) gives alone.
+        let mut alone = run.clone();
+        alone.streamed = None;
+        run.streamed = Some(built);
+        let (a, b) = (
+            root.join(format!("{case}-a")),
+            root.join(format!("{case}-b")),
+        );
+        write_all(&run, &scenario, &a).unwrap();
+        write_all(&alone, &scenario, &b).unwrap();
+        for (file, (x, y)) in files.iter().zip(read(&a).iter().zip(read(&b).iter())) {
+            assert!(x == y, "{case}: {file} differs");
+        }
+    }
+    std::fs::remove_dir_all(&root).ok();
+}
