@@ -163,30 +163,52 @@ pub fn scan_topics(
     mount: &LaserMount,
     scan_time_s: f64,
 ) -> Vec<(&'static str, Encoded)> {
-    let t = s.scan.stamp;
-    let mut tf = vec![stamped(
-        t,
-        "odom",
-        "base_link",
-        Transform::planar(s.odometry),
-    )];
-    if let Some(truth) = s.truth {
-        tf.push(stamped(
-            t,
-            "map",
-            "odom",
-            Transform::planar(truth.compose(&s.odometry.inverse())),
-        ));
-    }
-    if let Some(head) = s.scan.head {
-        tf.extend(head_transforms(mount, t, head));
-    }
+    let m = ScanMessages::of(s, mount, scan_time_s);
     let mut out = vec![
-        ("/clock", Encoded::of(&ClockMsg(t))),
-        ("/tf", Encoded::of(&TfMessage(tf))),
-        (
-            "/odom",
-            Encoded::of(&OdometryMsg {
+        ("/clock", Encoded::of(&m.clock)),
+        ("/tf", Encoded::of(&m.tf)),
+        ("/odom", Encoded::of(&m.odom)),
+    ];
+    if let Some(truth) = &m.truth {
+        out.push(("/ground_truth", Encoded::of(truth)));
+    }
+    out.push(("/scan", Encoded::of(&m.scan)));
+    out
+}
+
+/// One scan's messages (see [`scan_topics`]), not yet encoded.
+struct ScanMessages {
+    clock: ClockMsg,
+    tf: TfMessage,
+    odom: OdometryMsg,
+    truth: Option<PoseStampedMsg>,
+    scan: LaserScanMsg,
+}
+
+impl ScanMessages {
+    fn of(s: &RecordedScan, mount: &LaserMount, scan_time_s: f64) -> Self {
+        let t = s.scan.stamp;
+        let mut tf = vec![stamped(
+            t,
+            "odom",
+            "base_link",
+            Transform::planar(s.odometry),
+        )];
+        if let Some(truth) = s.truth {
+            tf.push(stamped(
+                t,
+                "map",
+                "odom",
+                Transform::planar(truth.compose(&s.odometry.inverse())),
+            ));
+        }
+        if let Some(head) = s.scan.head {
+            tf.extend(head_transforms(mount, t, head));
+        }
+        ScanMessages {
+            clock: ClockMsg(t),
+            tf: TfMessage(tf),
+            odom: OdometryMsg {
                 header: Header::new(t, "odom"),
                 child_frame_id: "base_link".into(),
                 pose: Transform::planar(s.odometry),
@@ -194,14 +216,11 @@ pub fn scan_topics(
                 linear: [0.0; 3],
                 angular: [0.0; 3],
                 twist_covariance: [0.0; 36],
-            }),
-        ),
-    ];
-    if let Some(truth) = s.truth {
-        out.push(("/ground_truth", Encoded::of(&pose_msg(t, "map", truth))));
+            },
+            truth: s.truth.map(|truth| pose_msg(t, "map", truth)),
+            scan: scan_msg(s.scan, scan_time_s),
+        }
     }
-    out.push(("/scan", Encoded::of(&scan_msg(s.scan, scan_time_s))));
-    out
 }
 
 fn write(path: &Path, r: &Recording) -> Result<u32, RecordError> {
@@ -273,12 +292,19 @@ impl<W: std::io::Write + std::io::Seek> McapStream<W> {
         })
     }
 
-    /// A kept scan's topics, at its stamp.
+    /// A kept scan's topics, at its stamp (each message encoded into the recorder's one buffer,
+    /// the bytes [`scan_topics`] gives).
     pub(crate) fn scan(&mut self, s: &RecordedScan) -> Result<(), RecordError> {
         let t = s.scan.stamp;
-        for (topic, msg) in scan_topics(s, &self.mount, self.scan_time_s) {
-            self.rec.write_encoded(topic, t, &msg)?;
+        let m = ScanMessages::of(s, &self.mount, self.scan_time_s);
+        let rec = &mut self.rec;
+        rec.write("/clock", t, &m.clock)?;
+        rec.write("/tf", t, &m.tf)?;
+        rec.write("/odom", t, &m.odom)?;
+        if let Some(truth) = &m.truth {
+            rec.write("/ground_truth", t, truth)?;
         }
+        rec.write("/scan", t, &m.scan)?;
         self.last = self.last.max(t);
         self.scans += 1;
         Ok(())
