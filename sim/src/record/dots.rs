@@ -52,13 +52,26 @@ pub struct Drawn {
     beyond: HashSet<(i64, i64)>,
 }
 
+/// Most cells a rectangle of bits holds (8 MiB of them); a larger rectangle keeps none, every
+/// cell drawn going to the set (a world kilometres wide draws its points all the same).
+pub const MAX_BITS: i64 = 1 << 26;
+
+/// A span of cells, both ends in.
+type Range = std::ops::RangeInclusive<i64>;
+
 impl Drawn {
-    /// None drawn, a bit kept for each cell of `columns` × `rows`.
+    /// None drawn, a bit kept for each cell of `columns` × `rows` (none when they are more
+    /// than [`MAX_BITS`]).
     pub fn new(
         columns: std::ops::RangeInclusive<i64>,
         rows: std::ops::RangeInclusive<i64>,
     ) -> Self {
         let size = |r: &std::ops::RangeInclusive<i64>| (r.end() - r.start() + 1).max(0);
+        let (columns, rows) = match size(&columns).checked_mul(size(&rows)) {
+            Some(cells) if cells <= MAX_BITS => (columns, rows),
+            // Empty: no cell lies in it.
+            _ => (Range::new(1, 0), Range::new(1, 0)),
+        };
         let words = usize::try_from(size(&columns) * size(&rows) / 64 + 1).unwrap_or(1);
         Drawn {
             columns,
@@ -279,6 +292,11 @@ mod tests {
             assert_eq!(drawn.insert(cell), Some(inside), "{cell:?} new");
             assert_eq!(drawn.insert(cell), None, "{cell:?} drawn once");
         }
+        // A rectangle kilometres wide keeps no bits: every cell is in the set, drawn once.
+        let mut wide = Drawn::new(-12_000_000..=12_000_000, -12_000_000..=12_000_000);
+        assert!(wide.bits.len() <= 1);
+        assert_eq!(wide.insert((5, 5)), Some(false));
+        assert_eq!(wide.insert((5, 5)), None);
     }
 
     #[test]
