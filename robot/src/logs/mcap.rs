@@ -14,7 +14,7 @@
 use super::{LogError, LogEvent, LogFormat, RecordedLog};
 use crate::geometry::Pose2;
 use crate::localization::RangeScan;
-use crate::logs::ros2::{CdrReader, Encoded, Ros2Message, TransformStamped};
+use crate::logs::ros2::{CdrReader, Ros2Message, TransformStamped};
 use crate::time::Stamp;
 use std::collections::BTreeMap;
 use std::io::{Seek, Write};
@@ -86,16 +86,6 @@ impl<W: Write + Seek> Recorder<W> {
         let written = self.write_cdr(topic, at, (M::NAME, M::definition), &cdr);
         self.scratch = cdr;
         written
-    }
-
-    /// Writes an encoded message on `topic`, stamped `at`.
-    pub fn write_encoded(
-        &mut self,
-        topic: &str,
-        at: Stamp,
-        msg: &Encoded,
-    ) -> Result<(), RecordError> {
-        self.write_cdr(topic, at, (msg.name, msg.definition), &msg.cdr)
     }
 
     /// Writes `cdr`, a message of the type named, on `topic`, stamped `at`.

@@ -231,7 +231,7 @@ fn write(path: &Path, r: &Recording) -> Result<u32, RecordError> {
         while let Some(s) = scans.next_if(|s| s.after.is_none_or(|n| n <= i)) {
             m.scan(s)?;
         }
-        m.exchange(exchange, &tape_json(exchange))?;
+        m.exchange(exchange)?;
     }
     for s in scans {
         m.scan(s)?;
@@ -254,6 +254,8 @@ pub(crate) struct McapStream<W: std::io::Write + std::io::Seek> {
     exchanges: usize,
     /// The last stamp of a scan written.
     last: Stamp,
+    /// The last exchange's JSON.
+    json: Vec<u8>,
 }
 
 impl<W: std::io::Write + std::io::Seek> std::fmt::Debug for McapStream<W> {
@@ -289,6 +291,7 @@ impl<W: std::io::Write + std::io::Seek> McapStream<W> {
             scans: 0,
             exchanges: 0,
             last: Stamp::ZERO,
+            json: Vec::new(),
         })
     }
 
@@ -310,17 +313,21 @@ impl<W: std::io::Write + std::io::Seek> McapStream<W> {
         Ok(())
     }
 
-    /// An exchange of the tape, `json` its text, at its answer's stamp (or the last stamp
-    /// before it).
+    /// An exchange of the tape, as JSON (`std_msgs/String`), at its answer's stamp (or the last
+    /// stamp before it). The JSON is written through one buffer the stream keeps: no allocation
+    /// an exchange once it has grown (on the stream's thread, beside the simulation's, every
+    /// allocation can wait on the allocator's lock the two share).
     pub(crate) fn exchange(
         &mut self,
         exchange: &robot::replay::Exchange,
-        json: &str,
     ) -> Result<(), RecordError> {
         self.tape_at = exchange
             .stamp()
             .map_or(self.tape_at, |s| s.max(self.tape_at));
         self.exchanges += 1;
+        self.json.clear();
+        serde_json::to_writer(&mut self.json, exchange).expect("an exchange serialises");
+        let json = std::str::from_utf8(&self.json).expect("serde_json writes UTF-8");
         self.rec
             .write(robot::logs::mcap::TAPE_TOPIC, self.tape_at, json)
     }
@@ -398,11 +405,6 @@ impl<W: std::io::Write + std::io::Seek> McapStream<W> {
         self.end(r)?;
         self.rec.finish_into()
     }
-}
-
-/// An exchange of the tape as `/hardware/tape` carries it.
-pub(super) fn tape_json(exchange: &robot::replay::Exchange) -> String {
-    serde_json::to_string(exchange).expect("an exchange serialises")
 }
 
 /// A scan of no beams: the example a live view announces `/scan` with before the first one.

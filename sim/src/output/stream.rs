@@ -110,8 +110,6 @@ struct Built {
     scan_lines: Vec<u8>,
     /// Exchanges handed over.
     exchanges: usize,
-    /// The last exchange's JSON.
-    json: Vec<u8>,
     /// Given up (`None`) at the first kept scan whose truth was not noted.
     dots: Option<ScanDots>,
     recording: Option<McapStream<Cursor<Vec<u8>>>>,
@@ -154,7 +152,6 @@ impl ScanStream {
                 grid: GridBuilder::new(GridConfig::default()),
                 scan_lines: Vec::new(),
                 exchanges: 0,
-                json: Vec::new(),
                 dots: Some(dots),
                 recording: Recorder::new(Cursor::new(Vec::new()))
                     .and_then(|rec| McapStream::start(rec, mount, scan_time_s, &transducers))
@@ -268,17 +265,9 @@ impl Built {
     /// An exchange of the tape, into the recording.
     fn exchange(&mut self, exchange: &Exchange) {
         self.exchanges += 1;
-        let Some(recording) = &mut self.recording else {
-            return;
-        };
-        // Written through one buffer: no allocation an exchange once it has grown (the
-        // simulation's thread allocates beside this one, and shares the allocator's locks).
-        self.json.clear();
-        let written = serde_json::to_writer(&mut self.json, exchange)
-            .ok()
-            .and_then(|()| std::str::from_utf8(&self.json).ok())
-            .map(|json| recording.exchange(exchange, json));
-        if !matches!(written, Some(Ok(()))) {
+        if let Some(recording) = &mut self.recording
+            && recording.exchange(exchange).is_err()
+        {
             // Written afterwards, whole.
             self.recording = None;
         }

@@ -387,11 +387,10 @@ fn framed(plan: &Plan, layer: &DotLayer, colour: &str, beyond: &mut (String, usi
     if layer.d.is_empty() && more.is_empty() {
         return String::new();
     }
-    let ascii = |d: &[u8]| {
-        std::str::from_utf8(d)
-            .map(str::to_owned)
-            .unwrap_or_default()
-    };
+    // Path data is ASCII (`push_move` writes nothing else).
+    fn ascii(d: &[u8]) -> &str {
+        std::str::from_utf8(d).expect("path data is ASCII")
+    }
     let (d, more) = (ascii(&layer.d), ascii(&more));
     // A cell is half a pixel: its column `i` lies at `origin + (i − left) / 2`, its row `j`
     // (written as `−j`) at `origin + (top − j) / 2`; a dot 2 pixels wide is 4 cells.
@@ -404,8 +403,8 @@ fn framed(plan: &Plan, layer: &DotLayer, colour: &str, beyond: &mut (String, usi
         r#"" stroke="currentColor" stroke-width="4" stroke-linecap="round" fill="none"/></g>"#;
     let mut body = String::with_capacity(open.len() + d.len() + more.len() + close.len());
     body.push_str(&open);
-    body.push_str(&d);
-    body.push_str(&more);
+    body.push_str(d);
+    body.push_str(more);
     body.push_str(close);
     body
 }
