@@ -45,6 +45,10 @@ pub struct Lorentz {
     /// When a σ pass stops: a search that moves the estimate by under 0.01 mm and 0.0001°, or
     /// 30 searches.
     pub convergence: Convergence,
+    /// When a σ pass before the last stops, if not as `convergence` (which the last pass
+    /// keeps). Not in the thesis; `None` (the default) stops every pass alike, and
+    /// [`Lorentz::with_lines`] has [`EARLY_CONVERGENCE`].
+    pub early_convergence: Option<Convergence>,
     /// Line-assisted association, when set.
     pub lines: Option<LineParams>,
     /// Leave out a current point whose nearest reference point is an
@@ -52,6 +56,13 @@ pub struct Lorentz {
     /// lies where the reference did not look. Not in the thesis; without it a 0.5 m retreat down
     /// the L-corridor comes out 0.1–0.4 m short. Default true.
     pub drop_edge_pairs: bool,
+    /// For dense scans (as `dense_sigmas_m`), in every schedule but the wide one: of the pairs
+    /// that share a nearest reference point, those more than this many times farther from their
+    /// targets than the nearest of them, and farther than it by more than the pass's σ, are
+    /// left out of the search. Not in
+    /// the thesis; `None` (the default) keeps them, and [`Lorentz::with_lines`] has
+    /// [`CROWD_RATIO`].
+    pub crowd_ratio: Option<f64>,
     /// A last point-to-line stage ([`polish`](super::polish)) after the σ passes: at most this
     /// many Gauss–Newton rounds on the current points within 5 cm of the reference's surfaces,
     /// Cauchy-weighted at 1 cm. Not in the thesis; 0 (the default) leaves it out, and
@@ -67,7 +78,10 @@ pub struct Lorentz {
     /// pairs precise; on Edmonton's sparse 1° scans it sometimes settles a few centimetres
     /// aside, and over 2,400 pairs (`twin matchers`, seeds 1–6, 11, 12) keeping the earlier
     /// answer there raised Edmonton's right answers from 0.934 to 0.945 (better on every seed),
-    /// lost no synthetic pair and left the Table 5.1 study as it was.
+    /// lost no synthetic pair and left the Table 5.1 study as it was. Only where the crowd
+    /// rule does not run (sparse scans, the wide schedule; [`Lorentz::crowd_ratio`]): on dense
+    /// scans with the rule, over seeds 1–20 it changed no right answer and no Table 5.1 trial
+    /// (about ten answers a seed by millimetres) for 5–8 % of the time.
     pub before_last_margin: Option<f64>,
     /// A second σ schedule, metres, tried from the guess when the first answer is not trusted
     /// ([`TrustRule`]), or is trusted but fits loosely (under `wide_below` of the current
@@ -217,6 +231,51 @@ pub fn beam_step(current: &ScanPoints) -> Option<f64> {
     Some(*steps.select_nth_unstable_by(middle, f64::total_cmp).1)
 }
 
+/// How many times farther from its target than the nearest pair on the same reference point
+/// a pair of a dense scan may lie and still count ([`Lorentz::crowd_ratio`]): three, as the
+/// reference matcher's rule for doubles ([`PointToLine`](super::PointToLine)), here with the
+/// pass's σ as a floor so that neighbouring points of one wall a few millimetres apart all
+/// stay.
+///
+/// Current points that see what the reference did not — past the end of the reference's
+/// view, round a corner it hid — have their nearest reference points at the edge of what it
+/// saw, tens of them on one point, 0.2–1.3 m away. Each pulls little at σ 5 cm, but together
+/// they pull like as many inliers a centimetre off: in the Table 5.1 study's trial 13357 (20 %
+/// outliers, a 25° turn left, the guess 1.2 mm from the truth) 45 current points of a wall the
+/// reference never saw lay on its last point of that wall, and the first pass walked 6 cm
+/// from the truth; the answer, 27.6 mm off, was trusted. Left out, the study's worst
+/// translation errors of `lorentz-lines` fell from 33.8 to 16.0 mm at 2 % outliers and from
+/// 27.6 to 13.0 mm at 20 % (`pl-icp`: 16.8 mm), every other figure of its rows the same or
+/// better. Over seeds 1–20 of `twin matchers` (6,000 pairs a row, Freiburg 101 5,820), with
+/// [`EARLY_CONVERGENCE`]: right answers 5995 → 5999 (synthetic, 0 %), 5982 → 5983 (20 %),
+/// 5717 → 5716 (Freiburg 101), 5677 → 5681 (Edmonton), 5595 → 5597 (large guesses), and
+/// Belgioioso 5999 → 5989: there the scans of pair 125 share one corner's walls, and the
+/// log's pose fits fewer of the current points (39 % within 5 cm) than either answer (53 %);
+/// the two stay equally good to the scans, and the one kept is now 14 cm from the log's pose,
+/// not 4 cm (the same pair on 9 seeds; pair 115 on 2 more, now 2.7° off, fitting 75 % of the
+/// points where the log's pose fits 68 %).
+///
+/// Sparse scans (the thesis's schedule) keep every pair: on Edmonton's 1° beams several
+/// current points share a reference point at long range, and the rule lost 63 of its 6,000
+/// pairs. Nor does the wide schedule ([`WIDE_SIGMAS`]) use it, which starts where the scans
+/// may still be decimetres apart and the nearest pair on a reference point is no better a
+/// guide than the others: with the rule there too the large guesses lost 7 pairs of 6,000.
+pub const CROWD_RATIO: f64 = 3.0;
+
+/// When the σ passes before the last stop in [`Lorentz::with_lines`]
+/// ([`Lorentz::early_convergence`]): a search that moves the estimate by under 0.1 mm and
+/// 0.001°, ten times the last pass's test; the next pass moves the estimate on anyway. Alone,
+/// over seeds 1–20 of `twin matchers`: Edmonton's right answers 5677 → 5681 and the large
+/// guesses' 5595 → 5598, the other rows within a pair; the median correspondence searches a
+/// pair on Edmonton 71 → 64. Alone it also moved one Table 5.1 trial's heading error up
+/// (14132, 20 % outliers: 0.505 → 0.518°); with [`CROWD_RATIO`] every figure of the study is
+/// the same or better.
+pub const EARLY_CONVERGENCE: Convergence = Convergence {
+    translation_m: 1e-4,
+    rotation_rad: 1e-3 * std::f64::consts::PI / 180.0,
+    max_iterations: 30,
+};
+
 /// The second schedule of [`Lorentz::with_lines`]: σ 20 cm first, then 5 and 0.5 cm. At
 /// σ 2 cm a point farther than a few centimetres from its pair barely pulls, so from a guess
 /// 20 cm and 10° off the first pass can settle on whatever few pairs happen to be near (a
@@ -317,6 +376,8 @@ impl Lorentz {
             line_residuals_spread: Some(LINE_RESIDUALS_SPREAD),
             first_spread: Some(FIRST_SPREAD),
             first_max_steps: Some(FIRST_STEPS),
+            early_convergence: Some(EARLY_CONVERGENCE),
+            crowd_ratio: Some(CROWD_RATIO),
             ..Lorentz::default()
         }
     }
@@ -491,6 +552,66 @@ impl Lorentz {
     }
 }
 
+/// The pairs of one search by the reference point they share, for [`Lorentz::crowd_ratio`].
+struct Crowding {
+    /// The ratio of distances past which a pair is crowded out.
+    ratio: f64,
+    /// Each pair's reference point and squared distance to its target, in pair order.
+    pairs: Vec<(usize, f64)>,
+    /// For each reference point, the smallest squared distance of a pair on it (infinity for
+    /// none); reset after each search.
+    nearest: Vec<f64>,
+}
+
+impl Crowding {
+    fn new(ratio: f64, reference_points: usize) -> Self {
+        Crowding {
+            ratio,
+            pairs: Vec::new(),
+            nearest: vec![f64::INFINITY; reference_points],
+        }
+    }
+
+    /// Notes the next pair: the current point `p` (moved), paired with reference point `j`
+    /// through `target`.
+    fn note(&mut self, j: usize, p: [f64; 2], target: [f64; 2]) {
+        let (dx, dy) = (target[0] - p[0], target[1] - p[1]);
+        let d2 = dx * dx + dy * dy;
+        self.pairs.push((j, d2));
+        if d2 < self.nearest[j] {
+            self.nearest[j] = d2;
+        }
+    }
+
+    /// Leaves out of the noted pairs those more than `ratio` times farther from their targets
+    /// than the nearest pair on the same reference point and farther than it by more than
+    /// `sigma`; the rest keep their order. Ready for the next search afterwards.
+    fn drop_crowded(
+        &mut self,
+        sigma: f64,
+        (sources, targets, normals): (&mut Vec<[f64; 2]>, &mut Vec<[f64; 2]>, &mut Vec<Normal>),
+    ) {
+        let ratio2 = self.ratio * self.ratio;
+        let mut kept = 0;
+        for (k, &(j, d2)) in self.pairs.iter().enumerate() {
+            let nearest = self.nearest[j];
+            if d2 <= ratio2 * nearest || d2.sqrt() <= nearest.sqrt() + sigma {
+                sources[kept] = sources[k];
+                targets[kept] = targets[k];
+                normals[kept] = normals[k];
+                kept += 1;
+            }
+        }
+        for &(j, _) in &self.pairs {
+            self.nearest[j] = f64::INFINITY;
+        }
+        self.pairs.clear();
+        sources.truncate(kept);
+        targets.truncate(kept);
+        normals.truncate(kept);
+    }
+}
+
 /// Line-assisted association: the reference's local lines ([`lines_of`]), the margin past a
 /// segment's ends a projection may reach, and when the pairs projected inside a line count
 /// their distance to it alone ([`Lorentz::line_residuals_spread`], for dense scans).
@@ -564,8 +685,10 @@ impl Default for Lorentz {
                 rotation_rad: 1e-4_f64.to_radians(),
                 max_iterations: 30,
             },
+            early_convergence: None,
             lines: None,
             drop_edge_pairs: true,
+            crowd_ratio: None,
             polish_rounds: 0,
             before_last_margin: None,
             wide_sigmas_m: Vec::new(),
@@ -605,6 +728,7 @@ impl ScanMatcher for Lorentz {
             spread: first_spread.or(spread),
         });
         let sigmas = self.schedule_for(dense);
+        let crowd = self.crowd_ratio.filter(|_| dense);
         let first_steps = self.first_max_steps.unwrap_or(self.max_steps);
         // Each current point's last nearest reference point, for every search of the match.
         let mut last = vec![None; current.len()];
@@ -612,7 +736,7 @@ impl ScanMatcher for Lorentz {
         // Every answer is judged by `passes`, by the rule `align` applies, so it carries its
         // quality and `align` does not judge it again.
         let mut first = self.passes(
-            (sigmas, first_steps),
+            (sigmas, first_steps, crowd),
             scans,
             lines.as_ref(),
             guess,
@@ -631,7 +755,7 @@ impl ScanMatcher for Lorentz {
         }
         if first_spread.is_some() && first.quality.inlier_share < self.wide_below {
             let again = self.passes(
-                (sigmas, first_steps),
+                (sigmas, first_steps, crowd),
                 scans,
                 lines.as_ref(),
                 guess,
@@ -658,7 +782,7 @@ impl ScanMatcher for Lorentz {
         let mut iterations = first.iterations;
         if !self.wide_sigmas_m.is_empty() && (!trusted || (loose && far)) {
             let wide = self.passes(
-                (&self.wide_sigmas_m, self.max_steps),
+                (&self.wide_sigmas_m, self.max_steps, None),
                 scans,
                 lines.as_ref(),
                 guess,
@@ -704,7 +828,7 @@ impl ScanMatcher for Lorentz {
         for offset in &self.restarts {
             let start = guess.compose(offset);
             let result = self.passes(
-                (sigmas, self.max_steps),
+                (sigmas, self.max_steps, crowd),
                 scans,
                 lines.as_ref(),
                 start,
@@ -721,7 +845,7 @@ impl ScanMatcher for Lorentz {
             let floor = first.quality.inlier_share + COARSE_MARGIN;
             for start in correlative::best_starts(from, to, guess, window, (*count, 3)) {
                 let result = self.passes(
-                    (sigmas, self.max_steps),
+                    (sigmas, self.max_steps, crowd),
                     scans,
                     lines.as_ref(),
                     start,
@@ -759,13 +883,14 @@ impl Lorentz {
             && beam_step(current).is_some_and(|step| step < self.dense_below_rad)
     }
 
-    /// The σ passes of `sigmas`, at most `steps` NLM steps a search, and the polish from
-    /// `guess`; the answer judged by the trust rule. `last` keeps each current point's last
-    /// nearest reference point from one search to the next, and from one call to the next of
-    /// a match (the same answers, searched less).
+    /// The σ passes of `sigmas`, at most `steps` NLM steps a search, leaving out crowded pairs
+    /// when `crowd` gives a ratio ([`Lorentz::crowd_ratio`]), and the polish from `guess`; the
+    /// answer judged by the trust rule. `last` keeps each current point's last nearest
+    /// reference point from one search to the next, and from one call to the next of a match
+    /// (the same answers, searched less).
     fn passes(
         &self,
-        (sigmas, steps): (&[f64], u32),
+        (sigmas, steps, crowd): (&[f64], u32, Option<f64>),
         (reference, current): (&Reference, &ScanPoints),
         lines: Option<&Assist>,
         guess: Pose2,
@@ -778,11 +903,16 @@ impl Lorentz {
         // Each pair's reference line normal, where its target is a projection inside one.
         let mut normals = Vec::with_capacity(current.len());
         let mut result = MatchResult::unmatched(guess);
+        // With the crowd rule: each pair's reference point and squared distance to its target.
+        let mut crowding = crowd.map(|ratio| Crowding::new(ratio, reference.points.len()));
         // The estimate before the last σ pass (not the guess), when it is to be polished too.
         let mut before_last = None;
         for (pass, &sigma) in sigmas.iter().enumerate() {
             if pass > 0 && pass + 1 == sigmas.len() && self.polish_rounds > 0 {
-                before_last = self.before_last_margin.map(|margin| (phi, margin));
+                before_last = self
+                    .before_last_margin
+                    .filter(|_| crowd.is_none())
+                    .map(|margin| (phi, margin));
             }
             result.settled = false;
             for _ in 0..self.convergence.max_iterations {
@@ -818,6 +948,12 @@ impl Lorentz {
                     sources.push(current.xy[i]);
                     targets.push(target);
                     normals.push(normal);
+                    if let Some(crowding) = &mut crowding {
+                        crowding.note(j, *p, target);
+                    }
+                }
+                if let Some(crowding) = &mut crowding {
+                    crowding.drop_crowded(sigma, (&mut sources, &mut targets, &mut normals));
                 }
                 result.correspondences = targets.len();
                 if targets.is_empty() {
@@ -834,7 +970,11 @@ impl Lorentz {
                     phi[2] - before[2],
                     wrap_angle(phi[0] - before[0]),
                 );
-                if self.convergence.reached(&step) {
+                let stop = match self.early_convergence {
+                    Some(early) if pass + 1 < sigmas.len() => early,
+                    _ => self.convergence,
+                };
+                if stop.reached(&step) {
                     result.settled = true;
                     break;
                 }
@@ -910,6 +1050,54 @@ mod tests {
         assert_eq!(m.schedule(&sparse), m.sigmas_m.as_slice());
         assert_eq!(m.schedule(&lonely), m.sigmas_m.as_slice());
         assert_eq!(Lorentz::default().schedule(&lms), m.sigmas_m.as_slice());
+    }
+
+    /// Of the pairs on one reference point, those more than three times farther than the
+    /// nearest and farther than it by more than σ are left out; the others, and every pair on
+    /// a point of its own, stay in their order, and the next search starts afresh.
+    #[test]
+    fn crowded_pairs_are_left_out() {
+        let mut crowding = Crowding::new(CROWD_RATIO, 4);
+        // (reference point, distance to the target along x).
+        let pairs = [
+            (2, 0.010),
+            (2, 0.025),
+            (1, 0.9),
+            (2, 0.5),
+            (2, 0.05),
+            (3, 0.2),
+        ];
+        let (mut sources, mut targets, mut normals) = (Vec::new(), Vec::new(), Vec::new());
+        for (k, &(j, d)) in pairs.iter().enumerate() {
+            let p = [k as f64, 0.0];
+            let target = [k as f64 + d, 0.0];
+            sources.push(p);
+            targets.push(target);
+            normals.push(None);
+            crowding.note(j, p, target);
+        }
+        crowding.drop_crowded(0.02, (&mut sources, &mut targets, &mut normals));
+        // On point 2 the nearest is 0.010 away: 0.025 is within three times that and stays;
+        // 0.05 and 0.5 are beyond both that and the nearest plus σ (0.03), and go. The pairs
+        // on points 1 and 3 are alone there.
+        let kept: Vec<usize> = sources.iter().map(|p| p[0] as usize).collect();
+        assert_eq!(kept, vec![0, 1, 2, 5]);
+        assert_eq!(targets.len(), 4);
+        assert_eq!(normals.len(), 4);
+        // With σ 5 cm, 0.05 lies within σ of the nearest (0.06) and stays; 0.5 still goes.
+        for (k, &(j, d)) in pairs.iter().enumerate() {
+            crowding.note(j, [k as f64, 0.0], [k as f64 + d, 0.0]);
+        }
+        let (mut s, mut t, mut n) = (
+            (0..6).map(|k| [k as f64, 0.0]).collect::<Vec<_>>(),
+            vec![[0.0; 2]; 6],
+            vec![None; 6],
+        );
+        crowding.drop_crowded(0.05, (&mut s, &mut t, &mut n));
+        let kept: Vec<usize> = s.iter().map(|p| p[0] as usize).collect();
+        assert_eq!(kept, vec![0, 1, 2, 4, 5]);
+        assert!(crowding.pairs.is_empty());
+        assert!(crowding.nearest.iter().all(|d| d.is_infinite()));
     }
 
     /// The energy, a logarithm per eight points, is the sum of every point's logarithm to

@@ -8,7 +8,7 @@
 //! |---|---|---|
 //! | `ls` | [`LeastSquares`] point-to-point ICP, the baseline | thesis §5.2 |
 //! | `lorentz` | [`Lorentz`]: Lorentzian error, Newton–Levenberg–Marquardt, σ 2 → 5 → 0.5 cm | thesis §3.4, App. F |
-//! | `lorentz-lines` | the same with line-assisted association; on dense scans point-to-line residuals where the lines spread and σ narrowing from 5 cm, one NLM step a search in the first match, a point-to-line polish, a wide second σ schedule, restarts and a coarse correlative search when an answer is not trusted (not in the thesis) | thesis §3.4.3, App. E.3 |
+//! | `lorentz-lines` | the same with line-assisted association; on dense scans point-to-line residuals where the lines spread, σ narrowing from 5 cm and pairs crowded onto one reference point left out, one NLM step a search in the first match, a point-to-line polish, a wide second σ schedule, restarts and a coarse correlative search when an answer is not trusted (not in the thesis) | thesis §3.4.3, App. E.3 |
 //! | `mbicp` | [`Mbicp`]: metric-based ICP | 002 §2.2 |
 //! | `pl-icp` | [`PointToLine`]: point-to-line ICP with CSM's defaults, the reference | Censi 2008 |
 //!
@@ -35,8 +35,8 @@ pub use icp::LeastSquares;
 pub use kdtree::{KdTree, LastNearest};
 pub use level::{LEVEL_TOLERANCE_RAD, LevelLocaliser};
 pub use lorentz::{
-    COARSE, DENSE_SIGMAS, FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD,
-    Lorentz, THESIS_SIGMAS, WIDE_SIGMAS, beam_step,
+    COARSE, CROWD_RATIO, DENSE_SIGMAS, EARLY_CONVERGENCE, FIRST_SPREAD, FIRST_SPREAD_MARGIN,
+    FIRST_STEPS, LINE_RESIDUALS_SPREAD, Lorentz, THESIS_SIGMAS, WIDE_SIGMAS, beam_step,
 };
 pub use map::{MapBuilder, MapConfig, MatchStats, Placed};
 pub use matcher::{

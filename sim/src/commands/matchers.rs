@@ -220,6 +220,9 @@ pub struct Outcome {
     pub matcher: MatcherKind,
     /// Translation and rotation errors, metres and radians.
     pub error: (f64, f64),
+    /// The guess's translation and rotation errors, metres and radians: how far the match
+    /// started from the truth.
+    pub guess_error: (f64, f64),
     /// Whether it was within the set's tolerance.
     pub success: bool,
     /// What the matcher answered.
@@ -232,14 +235,14 @@ pub struct Outcome {
 }
 
 /// The header of `pairs.csv`.
-pub const OUTCOMES_HEADER: &str = "set,pair,matcher,success,error_mm,error_deg,converged,settled,iterations,inliers,inlier_share,rms_mm,sigma_x_mm,sigma_y_mm,sigma_theta_deg,step_mm,step_deg,truth_inlier_share,disputed";
+pub const OUTCOMES_HEADER: &str = "set,pair,matcher,success,error_mm,error_deg,converged,settled,iterations,inliers,inlier_share,rms_mm,sigma_x_mm,sigma_y_mm,sigma_theta_deg,step_mm,step_deg,truth_inlier_share,disputed,guess_error_mm,guess_error_deg";
 
 impl Outcome {
     /// The outcome as a line of `pairs.csv`.
     pub fn csv(&self) -> String {
         let q = &self.result.quality;
         format!(
-            "\"{}\",{},{},{},{:.2},{:.3},{},{},{},{},{:.4},{:.2},{:.2},{:.2},{:.3},{:.2},{:.3},{:.4},{}",
+            "\"{}\",{},{},{},{:.2},{:.3},{},{},{},{},{:.4},{:.2},{:.2},{:.2},{:.3},{:.2},{:.3},{:.4},{},{:.2},{:.3}",
             self.set,
             self.pair,
             self.matcher,
@@ -259,6 +262,8 @@ impl Outcome {
             q.step[1].to_degrees(),
             self.truth_share,
             u8::from(self.disputed),
+            self.guess_error.0 * 1e3,
+            self.guess_error.1.to_degrees(),
         )
     }
 }
@@ -303,6 +308,10 @@ pub fn evaluate(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Out
                     pair,
                     matcher: kind,
                     error: (em, er),
+                    guess_error: {
+                        let off = case.truth.relative(&case.guess);
+                        (off.x.hypot(off.y), off.theta.abs())
+                    },
                     success: ok,
                     result,
                     truth_share,

@@ -27,7 +27,7 @@ mod report;
 
 pub use report::{CellStats, Summary, write_reports};
 
-use crate::commands::montecarlo::pairs::PairMaker;
+use crate::commands::montecarlo::pairs::{PairMaker, ScanPair};
 use crate::config::Outliers;
 use crate::config::Study;
 use crate::rng::{self, SimRng};
@@ -321,8 +321,9 @@ impl<'a> Trials<'a> {
         }
     }
 
-    /// Runs trial `index`.
-    pub fn run(&self, index: u64) -> Result<Trial, StudyError> {
+    /// Trial `index`'s scan pair and the odometry guess its matchers start from, without
+    /// matching: its twin's seed, the motion driven, the pair and the guess.
+    pub fn pair(&self, index: u64) -> Result<(u64, Motion, ScanPair, Pose2), StudyError> {
         let study = self.study;
         let rate_index = (index / study.trials_per_rate) as usize;
         let maker = &self.makers[rate_index.min(self.makers.len() - 1)];
@@ -339,6 +340,14 @@ impl<'a> Trials<'a> {
         let pair = maker.pair(start, rest, &mut rng);
         let mount = study.robot.laser_mount();
         let guess = start.compose(&mount).relative(&odometry.compose(&mount));
+        Ok((seed, motion, pair, guess))
+    }
+
+    /// Runs trial `index`.
+    pub fn run(&self, index: u64) -> Result<Trial, StudyError> {
+        let study = self.study;
+        let rate_index = (index / study.trials_per_rate) as usize;
+        let (seed, motion, pair, guess) = self.pair(index)?;
         let outcomes = study
             .matchers
             .iter()
