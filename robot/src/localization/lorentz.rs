@@ -59,9 +59,8 @@ pub struct Lorentz {
     /// For dense scans (as `dense_sigmas_m`), in every schedule but the wide one: of the pairs
     /// that share a nearest reference point, those more than this many times farther from their
     /// targets than the nearest of them, and farther than it by more than the pass's σ, are
-    /// left out of the search. Not in
-    /// the thesis; `None` (the default) keeps them, and [`Lorentz::with_lines`] has
-    /// [`CROWD_RATIO`].
+    /// left out of the search. Not in the thesis; `None` (the default) keeps them, and
+    /// [`Lorentz::with_lines`] has [`CROWD_RATIO`].
     pub crowd_ratio: Option<f64>,
     /// A last point-to-line stage ([`polish`](super::polish)) after the σ passes: at most this
     /// many Gauss–Newton rounds on the current points within 5 cm of the reference's surfaces,
