@@ -769,7 +769,7 @@ fn a_restart_is_not_free_to_slide() {
 /// apart — each fits as many current points, and more than the log's pose does.
 #[test]
 fn the_first_match_slides_along_its_lines_and_a_loose_answer_is_checked() {
-    use robot::localization::{FIRST_SPREAD, Lorentz, TrustRule};
+    use robot::localization::{FIRST_SPREAD, Lorentz};
     let unchecked = Lorentz {
         line_residuals_spread: Some(FIRST_SPREAD),
         first_spread: None,

@@ -290,8 +290,7 @@ pub fn evaluate(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Out
                 let reference = Reference::new(case.reference.points());
                 let result = matcher.align(&reference, &case.current.points(), case.guess);
                 micros.push(clock.elapsed().as_secs_f64() * 1e6);
-                let off = case.truth.relative(&result.pose);
-                let (em, er) = (off.x.hypot(off.y), off.theta.abs());
+                let (em, er) = off_truth(case, &result.pose);
                 let ok = em <= set.tolerance_m && er <= set.tolerance_rad;
                 success += usize::from(ok);
                 flagged += usize::from(result.converged);
@@ -308,10 +307,7 @@ pub fn evaluate(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Out
                     pair,
                     matcher: kind,
                     error: (em, er),
-                    guess_error: {
-                        let off = case.truth.relative(&case.guess);
-                        (off.x.hypot(off.y), off.theta.abs())
-                    },
+                    guess_error: off_truth(case, &case.guess),
                     success: ok,
                     result,
                     truth_share,
@@ -338,6 +334,13 @@ pub fn evaluate(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Out
             }
         })
         .collect()
+}
+
+/// How far `pose` lies from `case`'s truth: translation and rotation errors, metres and
+/// radians.
+fn off_truth(case: &Case, pose: &Pose2) -> (f64, f64) {
+    let off = case.truth.relative(pose);
+    (off.x.hypot(off.y), off.theta.abs())
 }
 
 /// The share of the current points within 5 cm of the reference scan's surfaces with the

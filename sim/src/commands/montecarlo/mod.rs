@@ -325,8 +325,7 @@ impl<'a> Trials<'a> {
     /// matching: its twin's seed, the motion driven, the pair and the guess.
     pub fn pair(&self, index: u64) -> Result<(u64, Motion, ScanPair, Pose2), StudyError> {
         let study = self.study;
-        let rate_index = (index / study.trials_per_rate) as usize;
-        let maker = &self.makers[rate_index.min(self.makers.len() - 1)];
+        let maker = &self.makers[self.rate_index(index).min(self.makers.len() - 1)];
         let mut rng: SimRng = rng::substream(self.stream, index);
         let seed: u64 = rng.random();
         let fail = |message: String| StudyError::Trial {
@@ -343,10 +342,15 @@ impl<'a> Trials<'a> {
         Ok((seed, motion, pair, guess))
     }
 
+    /// Which of the study's outlier rates trial `index` runs at (its trials come rate by rate).
+    fn rate_index(&self, index: u64) -> usize {
+        (index / self.study.trials_per_rate) as usize
+    }
+
     /// Runs trial `index`.
     pub fn run(&self, index: u64) -> Result<Trial, StudyError> {
         let study = self.study;
-        let rate_index = (index / study.trials_per_rate) as usize;
+        let rate_index = self.rate_index(index);
         let (seed, motion, pair, guess) = self.pair(index)?;
         let outcomes = study
             .matchers
