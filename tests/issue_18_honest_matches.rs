@@ -576,6 +576,52 @@ fn the_scans_dispute_a_corrected_pose_where_it_is_wrong() {
     }
 }
 
+/// Edmonton's corrected poses are off by about a decimetre on some pairs too, where the scans
+/// do not dispute them twice over: on pairs 282 and 288 `lorentz-lines` and `pl-icp`, started
+/// from the same guess, land within 3 cm and 0.5° of each other, 10–12 cm from the log's pose,
+/// and both fit 5 points in 100 more of the current points than it (0.50 against 0.31, 0.37
+/// against 0.23). Such failures are counted as agreed (and stay failures); on synthetic pairs,
+/// whose truth is exact, none is.
+#[test]
+fn two_matchers_agree_against_a_corrected_pose_where_it_is_off() {
+    let kinds = [MatcherKind::LorentzLines, MatcherKind::PointToLine];
+    for seed in [1, 7] {
+        let mut set = matchers::standard_sets(&repo(), 291, seed)
+            .expect("the bundled logs load")
+            .into_iter()
+            .find(|s| s.name.contains("edmonton"))
+            .expect("an Edmonton row");
+        set.cases.drain(..280);
+        let mut outcomes = Vec::new();
+        let mut rows = matchers::evaluate(&set, &kinds, &mut |o| outcomes.push(o));
+        matchers::mark_agreed(&mut outcomes, &mut rows);
+        for o in outcomes
+            .iter()
+            .filter(|o| o.matcher == MatcherKind::LorentzLines)
+        {
+            let pair = o.pair + 280;
+            if pair == 282 || pair == 288 {
+                assert!(
+                    !o.success && o.agreed && !o.disputed,
+                    "seed {seed}, pair {pair}: {:?}",
+                    (o.error, o.truth_share, o.result.quality.inlier_share)
+                );
+            }
+            if o.agreed {
+                assert!(!o.success, "seed {seed}, pair {pair}");
+            }
+        }
+        let agreed = |kind| rows.iter().find(|r| r.matcher == kind).unwrap().agreed;
+        assert!(agreed(MatcherKind::LorentzLines) >= 2, "{rows:?}");
+    }
+    for set in sets(40, 3).iter().filter(|s| s.name.contains("synthetic")) {
+        let mut outcomes = Vec::new();
+        let mut rows = matchers::evaluate(set, &kinds, &mut |o| outcomes.push(o));
+        matchers::mark_agreed(&mut outcomes, &mut rows);
+        assert!(rows.iter().all(|r| r.agreed == 0), "{rows:?}");
+    }
+}
+
 /// `twin matchers --show SET/PAIR` draws the pair: the reference scan, the current scan at the
 /// true pose and at each matcher's answer, all inside the picture and in its legend; a bad
 /// request is refused by name.

@@ -14,9 +14,11 @@ use std::path::Path;
 fn main() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let sets = matchers::standard_sets(&root, 100, 1).expect("the bundled worlds and logs load");
-    let rows: Vec<matchers::Row> = sets
+    let mut outcomes = Vec::new();
+    let mut rows: Vec<matchers::Row> = sets
         .iter()
-        .flat_map(|set| matchers::evaluate(set, &MatcherKind::ALL, &mut |_| {}))
+        .flat_map(|set| matchers::evaluate(set, &MatcherKind::ALL, &mut |o| outcomes.push(o)))
         .collect();
+    matchers::mark_agreed(&mut outcomes, &mut rows);
     print!("{}", matchers::table(&rows));
 }

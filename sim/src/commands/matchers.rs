@@ -15,8 +15,11 @@
 //! same rule as an answer (the share of current points within 5 cm of the reference scan's
 //! surfaces, [`TrustRule::assess`]), and a failure is **disputed** when the matcher's answer is
 //! trusted and fits at least [`DISPUTE_RATIO`] times that share: the scans then side with the
-//! answer, not with the reference. Disputed failures are counted, never turned into successes;
-//! `--show` draws such a pair.
+//! answer, not with the reference. A failure is **agreed** when another matcher of the same run,
+//! started from the same guess, answers within [`AGREE`] of it and both answers fit at least
+//! [`AGREE_MARGIN`] more of the current points than the reference pose: two matchers then
+//! side with each other against the reference. Neither is turned into a success; `--show`
+//! draws such a pair.
 //!
 //! Everything but the times is the same on every run and machine for a given seed.
 
@@ -203,11 +206,22 @@ pub struct Row {
     /// Failures whose trusted answer fits at least [`DISPUTE_RATIO`] times the share of
     /// current points the reference pose fits: pairs where the scans side with the answer.
     pub disputed: usize,
+    /// Failures another matcher of the run agrees with against the reference pose: set by
+    /// [`mark_agreed`] (0 before it, and when one matcher runs).
+    pub agreed: usize,
 }
 
 /// How many times the reference pose's share of fitting points a trusted answer must fit for
 /// its failure to count as disputed by the scans.
 pub const DISPUTE_RATIO: f64 = 2.0;
+
+/// How near two matchers' answers to one pair must lie to count as the same answer: 3 cm and
+/// 0.5° (a tenth of a real pair's tolerance, and a quarter of its heading's).
+pub const AGREE: (f64, f64) = (0.03, 0.5 * std::f64::consts::PI / 180.0);
+
+/// How much larger a share of the current points two agreeing answers must each fit than the
+/// reference pose for a failure to count as agreed against it: 5 points in 100.
+pub const AGREE_MARGIN: f64 = 0.05;
 
 /// One match of one pair: what `pairs.csv` lists.
 #[derive(Clone, Debug)]
@@ -232,17 +246,20 @@ pub struct Outcome {
     pub truth_share: f64,
     /// A failure whose trusted answer fits at least [`DISPUTE_RATIO`] times `truth_share`.
     pub disputed: bool,
+    /// A failure another matcher agrees with against the reference pose: set by
+    /// [`mark_agreed`] (false before it).
+    pub agreed: bool,
 }
 
 /// The header of `pairs.csv`.
-pub const OUTCOMES_HEADER: &str = "set,pair,matcher,success,error_mm,error_deg,converged,settled,iterations,inliers,inlier_share,rms_mm,sigma_x_mm,sigma_y_mm,sigma_theta_deg,step_mm,step_deg,truth_inlier_share,disputed,guess_error_mm,guess_error_deg";
+pub const OUTCOMES_HEADER: &str = "set,pair,matcher,success,error_mm,error_deg,converged,settled,iterations,inliers,inlier_share,rms_mm,sigma_x_mm,sigma_y_mm,sigma_theta_deg,step_mm,step_deg,truth_inlier_share,disputed,guess_error_mm,guess_error_deg,agreed,x_m,y_m,theta_deg";
 
 impl Outcome {
     /// The outcome as a line of `pairs.csv`.
     pub fn csv(&self) -> String {
         let q = &self.result.quality;
         format!(
-            "\"{}\",{},{},{},{:.2},{:.3},{},{},{},{},{:.4},{:.2},{:.2},{:.2},{:.3},{:.2},{:.3},{:.4},{},{:.2},{:.3}",
+            "\"{}\",{},{},{},{:.2},{:.3},{},{},{},{},{:.4},{:.2},{:.2},{:.2},{:.3},{:.2},{:.3},{:.4},{},{:.2},{:.3},{},{:.5},{:.5},{:.4}",
             self.set,
             self.pair,
             self.matcher,
@@ -264,7 +281,47 @@ impl Outcome {
             u8::from(self.disputed),
             self.guess_error.0 * 1e3,
             self.guess_error.1.to_degrees(),
+            u8::from(self.agreed),
+            self.result.pose.x,
+            self.result.pose.y,
+            self.result.pose.theta.to_degrees(),
         )
+    }
+}
+
+/// Marks each failure in `outcomes` that another matcher's answer to the same pair of the same
+/// set lies within [`AGREE`] of, when both answers fit at least [`AGREE_MARGIN`] more of the
+/// current points than the reference pose; and counts them in the matching `rows`.
+pub fn mark_agreed(outcomes: &mut [Outcome], rows: &mut [Row]) {
+    let mut by_pair: std::collections::BTreeMap<(&str, usize), Vec<usize>> = Default::default();
+    for (k, o) in outcomes.iter().enumerate() {
+        by_pair.entry((o.set.as_str(), o.pair)).or_default().push(k);
+    }
+    let fits = |o: &Outcome| o.result.quality.inlier_share >= o.truth_share + AGREE_MARGIN;
+    let mut agreed = vec![false; outcomes.len()];
+    for group in by_pair.values() {
+        for &a in group {
+            let oa = &outcomes[a];
+            agreed[a] = !oa.success
+                && fits(oa)
+                && group.iter().any(|&b| {
+                    let ob = &outcomes[b];
+                    let off = oa.result.pose.relative(&ob.result.pose);
+                    b != a
+                        && fits(ob)
+                        && off.x.hypot(off.y) <= AGREE.0
+                        && off.theta.abs() <= AGREE.1
+                });
+        }
+    }
+    for (o, agreed) in outcomes.iter_mut().zip(agreed) {
+        o.agreed = agreed;
+    }
+    for row in rows {
+        row.agreed = outcomes
+            .iter()
+            .filter(|o| o.agreed && o.set == row.set && o.matcher == row.matcher)
+            .count();
     }
 }
 
@@ -312,6 +369,7 @@ pub fn evaluate(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Out
                     result,
                     truth_share,
                     disputed,
+                    agreed: false,
                 });
             }
             let n = set.cases.len().max(1) as f64;
@@ -331,6 +389,7 @@ pub fn evaluate(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Out
                 flag_precision: share(both, flagged),
                 flag_recall: share(both, success),
                 disputed: disputed_count,
+                agreed: 0,
             }
         })
         .collect()
@@ -366,7 +425,7 @@ fn quantile(values: &mut [f64], q: f64) -> f64 {
 /// the same set (the same run, so the ratio travels between machines).
 pub fn table(rows: &[Row]) -> String {
     let mut out = String::from(
-        "| pairs | matcher | success | median / p95 error | median time | × first | flagged | flag precision / recall | failures disputed |\n|---|---|---|---|---|---|---|---|---|\n",
+        "| pairs | matcher | success | median / p95 error | median time | × first | flagged | flag precision / recall | failures disputed | failures agreed |\n|---|---|---|---|---|---|---|---|---|---|\n",
     );
     let mut first_us = f64::NAN;
     let mut last_set = "";
@@ -376,7 +435,7 @@ pub fn table(rows: &[Row]) -> String {
             last_set = &r.set;
         }
         out.push_str(&format!(
-            "| {} ({}) | {} | {:.3} | {:.1} / {:.1} mm, {:.2} / {:.2}° | {:.2} ms | {:.2} | {:.3} | {:.3} / {:.3} | {} |\n",
+            "| {} ({}) | {} | {:.3} | {:.1} / {:.1} mm, {:.2} / {:.2}° | {:.2} ms | {:.2} | {:.3} | {:.3} / {:.3} | {} | {} |\n",
             r.set,
             r.pairs,
             r.matcher,
@@ -391,6 +450,7 @@ pub fn table(rows: &[Row]) -> String {
             r.flag_precision,
             r.flag_recall,
             r.disputed,
+            r.agreed,
         ));
     }
     out
@@ -590,17 +650,21 @@ pub fn main(args: MatchersArgs) -> Result<(), CommandError> {
         total as u64,
         "{spinner} matching [{bar:30}] {pos}/{len} pairs {rate} {eta}",
     );
-    let mut lines = vec![OUTCOMES_HEADER.to_string()];
-    let rows: Vec<Row> = sets
+    let mut outcomes = Vec::with_capacity(total);
+    let mut rows: Vec<Row> = sets
         .iter()
         .flat_map(|set| {
             evaluate(set, &kinds, &mut |outcome| {
                 bar.inc(1);
-                lines.push(outcome.csv());
+                outcomes.push(outcome);
             })
         })
         .collect();
     bar.finish_and_clear();
+    mark_agreed(&mut outcomes, &mut rows);
+    let lines: Vec<String> = std::iter::once(OUTCOMES_HEADER.to_string())
+        .chain(outcomes.iter().map(Outcome::csv))
+        .collect();
     say!("{}", table(&rows));
     if let Some(dir) = &args.out {
         let write = |source| CommandError::Write {
@@ -613,4 +677,86 @@ pub fn main(args: MatchersArgs) -> Result<(), CommandError> {
         robot::logs::write_file(dir.join("pairs.csv"), lines.join("\n") + "\n").map_err(write)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A failure of `matcher` on `pair` answering `pose`, fitting `share` of the current points
+    /// where the reference pose fits 0.3.
+    fn failure(pair: usize, matcher: MatcherKind, pose: Pose2, share: f64) -> Outcome {
+        let mut result = MatchResult::unmatched(pose);
+        result.quality.inlier_share = share;
+        Outcome {
+            set: "real".into(),
+            pair,
+            matcher,
+            error: (0.12, 0.0),
+            guess_error: (0.05, 0.01),
+            success: false,
+            result,
+            truth_share: 0.3,
+            disputed: false,
+            agreed: false,
+        }
+    }
+
+    fn row(matcher: MatcherKind) -> Row {
+        Row {
+            set: "real".into(),
+            matcher,
+            pairs: 3,
+            success: 0.0,
+            error_m: [0.0; 2],
+            error_rad: [0.0; 2],
+            median_us: 1.0,
+            flagged: 0.0,
+            flag_precision: 1.0,
+            flag_recall: 1.0,
+            disputed: 0,
+            agreed: 0,
+        }
+    }
+
+    /// A failure is agreed when another matcher's answer to the same pair lies within 3 cm and
+    /// 0.5° and both fit 5 points in 100 more than the reference pose; not when the answers lie
+    /// apart, when either fits too little, when the other is another pair's, or for a success.
+    #[test]
+    fn agreement_needs_a_near_answer_that_fits_better() {
+        let (ll, pl, mb) = (
+            MatcherKind::LorentzLines,
+            MatcherKind::PointToLine,
+            MatcherKind::Mbicp,
+        );
+        let at = |x: f64, theta_deg: f64| Pose2::new(x, 0.0, theta_deg.to_radians());
+        let mut outcomes = vec![
+            // Pair 0: the first two agree (2.9 cm, 0.4° apart); the third is 4 cm from the
+            // second and 7 cm from the first.
+            failure(0, ll, at(0.100, 0.0), 0.50),
+            failure(0, pl, at(0.129, 0.4), 0.40),
+            failure(0, mb, at(0.170, 0.0), 0.60),
+            // Pair 1: together, but one fits only 4 points in 100 more than the reference pose.
+            failure(1, ll, at(0.1, 0.0), 0.50),
+            failure(1, pl, at(0.1, 0.0), 0.34),
+            // Pair 2: together on the pose, but one is a success.
+            failure(2, ll, at(0.1, 0.0), 0.50),
+            Outcome {
+                success: true,
+                ..failure(2, pl, at(0.1, 0.0), 0.50)
+            },
+        ];
+        let mut rows = vec![row(ll), row(pl), row(mb)];
+        mark_agreed(&mut outcomes, &mut rows);
+        let agreed: Vec<bool> = outcomes.iter().map(|o| o.agreed).collect();
+        assert_eq!(agreed, vec![true, true, false, false, false, true, false]);
+        assert_eq!(
+            rows.iter().map(|r| r.agreed).collect::<Vec<_>>(),
+            vec![2, 1, 0]
+        );
+        // Its line in `pairs.csv` says so, with the answer.
+        let line = outcomes[0].csv();
+        assert!(line.ends_with(",1,0.10000,0.00000,0.0000"), "{line}");
+        assert_eq!(line.split(',').count(), OUTCOMES_HEADER.split(',').count());
+    }
 }
