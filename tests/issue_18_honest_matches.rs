@@ -530,6 +530,18 @@ fn a_coarse_search_finds_what_the_restarts_miss() {
     }
 }
 
+/// The pairs `range` of the corrected log named `log` (its row of `twin matchers`), with the
+/// guesses of `seed`; pair numbers in the outcomes then count from the range's start.
+fn log_pairs(log: &str, range: std::ops::Range<usize>, seed: u64) -> CaseSet {
+    let mut set = matchers::standard_sets(&repo(), range.end, seed)
+        .expect("the bundled logs load")
+        .into_iter()
+        .find(|s| s.name.contains(log))
+        .expect("the log's row");
+    set.cases.drain(..range.start);
+    set
+}
+
 /// A corrected log's pose can be wrong where the scans are not: on Freiburg 101's pairs 248–250,
 /// on every seed, point-to-line ICP and `lorentz-lines` agree within a centimetre on an answer
 /// 11–14 cm from the log's pose, which leaves under a third of the current points on the
@@ -539,12 +551,7 @@ fn a_coarse_search_finds_what_the_restarts_miss() {
 fn the_scans_dispute_a_corrected_pose_where_it_is_wrong() {
     let kinds = [MatcherKind::LorentzLines, MatcherKind::PointToLine];
     for seed in [1, 7] {
-        let mut set = matchers::standard_sets(&repo(), 252, seed)
-            .expect("the bundled logs load")
-            .into_iter()
-            .find(|s| s.name.contains("freiburg"))
-            .expect("a Freiburg row");
-        set.cases.drain(..246);
+        let set = log_pairs("freiburg", 246..252, seed);
         let mut outcomes = Vec::new();
         let rows = matchers::evaluate(&set, &kinds, &mut |o| outcomes.push(o));
         for o in &outcomes {
@@ -586,12 +593,7 @@ fn the_scans_dispute_a_corrected_pose_where_it_is_wrong() {
 fn two_matchers_agree_against_a_corrected_pose_where_it_is_off() {
     let kinds = [MatcherKind::LorentzLines, MatcherKind::PointToLine];
     for seed in [1, 7] {
-        let mut set = matchers::standard_sets(&repo(), 291, seed)
-            .expect("the bundled logs load")
-            .into_iter()
-            .find(|s| s.name.contains("edmonton"))
-            .expect("an Edmonton row");
-        set.cases.drain(..280);
+        let set = log_pairs("edmonton", 280..291, seed);
         let mut outcomes = Vec::new();
         let mut rows = matchers::evaluate(&set, &kinds, &mut |o| outcomes.push(o));
         matchers::mark_agreed(&mut outcomes, &mut rows);
