@@ -326,7 +326,9 @@ pub fn mark_agreed(outcomes: &mut [Outcome], rows: &mut [Row]) {
 }
 
 /// Every matcher of `kinds` on every pair of `set`, one after the other on this thread; each
-/// match's outcome goes to `record`.
+/// match's outcome goes to `record` as soon as it is known (so a caller can show progress).
+/// Agreement between matchers needs every answer to a pair first: the rows and outcomes say
+/// none until [`mark_agreed`] is given them.
 pub fn evaluate(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Outcome)) -> Vec<Row> {
     let truth_shares: Vec<f64> = set
         .cases
