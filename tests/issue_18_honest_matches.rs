@@ -625,8 +625,8 @@ fn two_matchers_agree_against_a_corrected_pose_where_it_is_off() {
 }
 
 /// `twin matchers --show SET/PAIR` draws the pair: the reference scan, the current scan at the
-/// true pose and at each matcher's answer, all inside the picture and in its legend; a bad
-/// request is refused by name.
+/// true pose and at each matcher's answer, all inside the picture and in its legend, with a
+/// detail view where the scans share only a corner of it; a bad request is refused by name.
 #[test]
 fn twin_matchers_shows_a_pair() {
     let out = tempfile_dir("twin-matchers-show");
@@ -662,6 +662,32 @@ fn twin_matchers_shows_a_pair() {
     ] {
         assert!(svg.contains(label), "{label} missing");
     }
+    // Freiburg's scans share surfaces across the whole view: one view, no detail.
+    assert!(
+        !svg.contains("detail-area"),
+        "a detail view of Freiburg 101's pair 248"
+    );
+    // A synthetic pair with 20 % outliers out to 32 m, the robot facing one wall: a detail
+    // view beside the overview, its grid finer, its area drawn on the overview and listed.
+    let run = show("20 %/35", true);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let svg = std::fs::read_to_string(out.join("pair-synthetic-20-35.svg")).unwrap();
+    assert_eq!(crate::common::svg::problems(&svg), Vec::<String>::new());
+    assert!(
+        svg.contains(r#"data-layer="detail-area""#),
+        "no detail view"
+    );
+    let grids: Vec<f64> = svg
+        .split("grid ")
+        .skip(1)
+        .filter_map(|rest| rest.split(' ').next()?.parse().ok())
+        .collect();
+    assert_eq!(grids.len(), 2, "two views, each with its grid: {grids:?}");
+    assert!(grids[1] < grids[0], "the detail's grid is finer: {grids:?}");
     for (spec, with_out, expected) in [
         ("freiburg-101", true, "SET/PAIR"),
         ("nowhere/3", true, "row's name"),

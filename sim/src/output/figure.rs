@@ -198,6 +198,12 @@ pub fn grid_step(span: f64, pixels: f64) -> f64 {
         .unwrap_or(10.0 * decade)
 }
 
+/// The decimals a label of a multiple of `step` needs (1, 2 or 5 × 10ⁿ m): none for a metre
+/// and more, one for 0.1–0.5 m, two for 0.01–0.05 m.
+fn decimals_of(step: f64) -> usize {
+    (-(step.log10() + 1e-9).floor()).max(0.0) as usize
+}
+
 /// The smallest and largest coordinates of the finite `points`, or a 2 m square around the
 /// origin when none is finite: the extent a plan view is fitted to.
 pub fn extent(points: impl IntoIterator<Item = [f64; 2]>) -> ([f64; 2], [f64; 2]) {
@@ -288,7 +294,7 @@ impl Plan {
         );
         let mut lines = String::new();
         let mut labels = String::new();
-        let decimals = if step < 1.0 { 1 } else { 0 };
+        let decimals = decimals_of(step);
         let label = |v: f64| {
             let v = if v.abs() < step * 1e-6 { 0.0 } else { v };
             format!("{v:.decimals$}")
@@ -349,13 +355,15 @@ impl Plan {
             .unwrap_or(decade);
         let length = metres * self.scale;
         let left = right - length;
-        let shown = if metres < 1.0 {
-            format!("{metres:.1}")
+        let shown = if metres >= 1.0 {
+            format!("{metres:.0} m")
+        } else if metres >= 0.01 {
+            format!("{:.0} cm", metres * 100.0)
         } else {
-            format!("{metres:.0}")
+            format!("{:.0} mm", metres * 1000.0)
         };
         format!(
-            r#"<g><line x1="{left:.1}" y1="{y:.1}" x2="{right:.1}" y2="{y:.1}" stroke="black" stroke-width="3"/><line x1="{left:.1}" y1="{:.1}" x2="{left:.1}" y2="{:.1}" stroke="black"/><line x1="{right:.1}" y1="{:.1}" x2="{right:.1}" y2="{:.1}" stroke="black"/><text x="{:.1}" y="{:.1}" text-anchor="middle">{shown} m</text></g>"#,
+            r#"<g><line x1="{left:.1}" y1="{y:.1}" x2="{right:.1}" y2="{y:.1}" stroke="black" stroke-width="3"/><line x1="{left:.1}" y1="{:.1}" x2="{left:.1}" y2="{:.1}" stroke="black"/><line x1="{right:.1}" y1="{:.1}" x2="{right:.1}" y2="{:.1}" stroke="black"/><text x="{:.1}" y="{:.1}" text-anchor="middle">{shown}</text></g>"#,
             y - 5.0,
             y + 5.0,
             y - 5.0,
@@ -376,6 +384,43 @@ mod tests {
         assert_eq!(grid_step(20.0, 400.0), 2.0);
         assert_eq!(grid_step(200.0, 900.0), 10.0);
         assert_eq!(grid_step(2.0, 900.0), 0.1);
+    }
+
+    #[test]
+    fn small_grids_and_scale_bars_keep_their_digits() {
+        assert_eq!(decimals_of(5.0), 0);
+        assert_eq!(decimals_of(1.0), 0);
+        assert_eq!(decimals_of(0.5), 1);
+        assert_eq!(decimals_of(0.1), 1);
+        assert_eq!(decimals_of(0.05), 2);
+        assert_eq!(decimals_of(0.01), 2);
+        let plan = |scale| Plan {
+            min: [0.0, 0.0],
+            max: [1.0, 1.0],
+            origin: [0.0, 0.0],
+            scale,
+        };
+        // 125 pixels are 5 m, 50 cm, 5 cm and 5 mm at these scales.
+        for (scale, label) in [
+            (25.0, ">5 m<"),
+            (250.0, ">50 cm<"),
+            (2500.0, ">5 cm<"),
+            (25_000.0, ">5 mm<"),
+        ] {
+            let bar = plan(scale).scale_bar(200.0, 50.0);
+            assert!(bar.contains(label), "{scale}: {bar}");
+        }
+        let grid = Plan {
+            min: [0.0, 0.0],
+            max: [0.3, 0.3],
+            origin: [40.0, 20.0],
+            scale: 2000.0,
+        }
+        .grid();
+        assert!(
+            grid.contains(">0.02<") && grid.contains("grid 0.02 m"),
+            "{grid}"
+        );
     }
 
     #[test]
