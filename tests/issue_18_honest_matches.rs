@@ -646,14 +646,19 @@ fn twin_matchers_shows_a_pair() {
         }
         command.output().unwrap()
     };
-    let run = show("freiburg-101/248", true);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let svg = std::fs::read_to_string(out.join("pair-real-freiburg-101-248.svg")).unwrap();
-    assert_eq!(crate::common::svg::problems(&svg), Vec::<String>::new());
+    // The picture of `spec`, written as `file`: drawn, and every element inside its canvas.
+    let drawn = |spec: &str, file: &str| {
+        let run = show(spec, true);
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let svg = std::fs::read_to_string(out.join(file)).unwrap();
+        assert_eq!(crate::common::svg::problems(&svg), Vec::<String>::new());
+        svg
+    };
+    let svg = drawn("freiburg-101/248", "pair-real-freiburg-101-248.svg");
     for label in [
         "reference scan",
         "the pose given as truth",
@@ -669,14 +674,7 @@ fn twin_matchers_shows_a_pair() {
     );
     // A synthetic pair with 20 % outliers out to 32 m, the robot facing one wall: a detail
     // view beside the overview, its grid finer, its area drawn on the overview and listed.
-    let run = show("20 %/35", true);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
-    let svg = std::fs::read_to_string(out.join("pair-synthetic-20-35.svg")).unwrap();
-    assert_eq!(crate::common::svg::problems(&svg), Vec::<String>::new());
+    let svg = drawn("20 %/35", "pair-synthetic-20-35.svg");
     assert!(
         svg.contains(r#"data-layer="detail-area""#),
         "no detail view"

@@ -39,7 +39,7 @@ const SHARED_M: f64 = 0.05;
 ///
 /// Where the scans share only a small part of the overview (outliers tens of metres out, a
 /// robot facing a box), a detail view beside it shows that part, its area marked on the
-/// overview ([`detail_area`]).
+/// overview (fitted to the reference points that some current point lies within 5 cm of).
 pub fn write_pair_svg(
     path: &Path,
     title: &str,
