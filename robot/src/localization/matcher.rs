@@ -1,7 +1,7 @@
 //! The one interface every scan matcher implements, and the pieces they share.
 
 use super::kdtree::KdTree;
-use super::quality::{MatchQuality, Surface, TrustRule, surfaces};
+use super::quality::{MatchQuality, Surface, TrustRule, surfaces, unresolved};
 use super::scan::{RangeScan, ScanPoints};
 use crate::geometry::Pose2;
 use std::fmt;
@@ -60,6 +60,8 @@ pub struct Reference {
     pub tree: KdTree,
     /// The surface at each point, for point-to-line residuals.
     surfaces: Vec<Option<Surface>>,
+    /// Which points have no surface because the beams lie too far apart there.
+    unresolved: Vec<bool>,
 }
 
 impl Reference {
@@ -67,11 +69,20 @@ impl Reference {
     pub fn new(points: ScanPoints) -> Self {
         let tree = KdTree::new(&points.xy);
         let surfaces = surfaces(&points.xy);
+        let unresolved = unresolved(&points.xy, &points.beam, &surfaces);
         Reference {
             points,
             tree,
             surfaces,
+            unresolved,
         }
+    }
+
+    /// Whether point `j` has no surface because the reference's beams lie farther apart there
+    /// than a surface may span (far readings of a sparse scan): the trust rule does not judge
+    /// a current point by it.
+    pub fn unresolved(&self, j: usize) -> bool {
+        self.unresolved.get(j).copied().unwrap_or(false)
     }
 
     /// The reference's surface at point `j`, if its neighbours give it a direction.

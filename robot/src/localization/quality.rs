@@ -7,7 +7,9 @@
 //! - **inliers**: each current point, moved by the answer, is compared with the reference's
 //!   surface near it — the line fitted to its nearest reference point's neighbours in scan
 //!   order (point to line, as Censi's PL-ICP), or the point itself where the scan
-//!   has no neighbour near — and is an inlier within [`TrustRule::inlier_m`];
+//!   has no neighbour near — and is an inlier within [`TrustRule::inlier_m`]; a point whose
+//!   nearest reference point has no neighbour near only because the reference's beams lie too
+//!   far apart there (a sparse scan's far readings, [`unresolved`]) is not judged;
 //! - **residual**: the root mean square of the inliers' distances;
 //! - **covariance**: the Fisher information of the inliers' point-to-line constraints,
 //!   `I = Σ J Jᵀ / s²` with `J = (n_x, n_y, n · ∂p/∂θ)` and `s` the residual (Censi, "An accurate
@@ -27,7 +29,12 @@ use crate::geometry::Pose2;
 pub struct MatchQuality {
     /// Current points within [`TrustRule::inlier_m`] of the reference's surface.
     pub inliers: usize,
-    /// The inliers' share of the current scan's points.
+    /// The inliers' share of the current scan's points that the rule can judge: all but
+    /// those whose nearest reference point is a lone point where the reference's beams lie
+    /// farther apart than a surface may span ([`Reference::unresolved`]; far readings of a
+    /// sparse scan, 17 m out at 1° a beam).
+    ///
+    /// [`Reference::unresolved`]: super::Reference::unresolved
     pub inlier_share: f64,
     /// Root mean square of the inliers' distances to the reference's surface, metres.
     pub rms_m: f64,
@@ -137,8 +144,12 @@ impl TrustRule {
         }
         let mut information = [[0.0f64; 3]; 3];
         let mut gradient = [0.0f64; 3];
-        let (mut inliers, mut sum2) = (0usize, 0.0f64);
+        let (mut inliers, mut judged, mut sum2) = (0usize, 0usize, 0.0f64);
         for constraint in constraints(reference, current, pose, last) {
+            if !constraint.judged {
+                continue;
+            }
+            judged += 1;
             let distance = constraint.residual.abs();
             if distance > self.inlier_m {
                 continue;
@@ -172,7 +183,7 @@ impl TrustRule {
             .map_or([f64::INFINITY; 2], |d| [d[0].hypot(d[1]), d[2].abs()]);
         MatchQuality {
             inliers,
-            inlier_share: inliers as f64 / current.len() as f64,
+            inlier_share: inliers as f64 / judged.max(1) as f64,
             rms_m,
             sigma: [column(0), column(1), column(2)],
             step,
@@ -246,6 +257,10 @@ struct Constraint {
     /// Whether the point lies past the ends of the reference points its line was fitted to
     /// (by more than [`END_MARGIN_M`]): the line's direction, extrapolated, would twist it.
     beyond: bool,
+    /// Whether the trust rule can judge the point: not when its nearest reference point is
+    /// [unresolved](Reference::unresolved), where the reference's beams lie too far apart for a
+    /// surface and the distance to that point says nothing of the fit.
+    judged: bool,
 }
 
 /// Each current point's [`Constraint`] at `pose`; with `last`, each point's last nearest
@@ -279,12 +294,14 @@ fn constraints<'a>(
                     jacobian: Some([n[0], n[1], -n[0] * r[1] + n[1] * r[0]]),
                     beyond: (n[1] * (q[0] - a[0]) - n[0] * (q[1] - a[1])).abs()
                         > reach + END_MARGIN_M,
+                    judged: true,
                 }
             }
             None => Constraint {
                 residual: d2.sqrt(),
                 jacobian: None,
                 beyond: false,
+                judged: !reference.unresolved(j),
             },
         })
     })
@@ -312,10 +329,51 @@ pub(super) struct Surface {
     pub reach: f64,
 }
 
+/// Whether each reference point is *unresolved*: it has no surface, and its beam and the next
+/// one (in the reference's scan, at its range) lie farther apart than [`MAX_GAP_M`], so no
+/// neighbour could have given it one. A lone point nearer than that is an outlier or a small
+/// thing (a pole) and is judged as a point; an unresolved one may lie on a wall seen between
+/// beams, and a current point near that wall would be counted off it by the distance to the
+/// point alone. `beam` gives each point's beam number.
+pub(super) fn unresolved(
+    points: &[[f64; 2]],
+    beam: &[usize],
+    surfaces: &[Option<Surface>],
+) -> Vec<bool> {
+    (0..points.len())
+        .map(|j| {
+            if surfaces[j].is_some() {
+                return false;
+            }
+            // The angle a beam turns, from the neighbour in scan order (as seen from the laser).
+            let k = if j + 1 < points.len() {
+                j + 1
+            } else {
+                j.wrapping_sub(1)
+            };
+            let (Some(&p), Some(&q)) = (points.get(j), points.get(k)) else {
+                return false;
+            };
+            let beams = beam[j].abs_diff(beam[k]);
+            if beams == 0 {
+                return false;
+            }
+            let turn = (p[0] * q[1] - p[1] * q[0])
+                .abs()
+                .atan2(p[0] * q[0] + p[1] * q[1]);
+            p[0].hypot(p[1]) * turn / beams as f64 > MAX_GAP_M
+        })
+        .collect()
+}
+
 /// The reference's surface at each of its points ([`surface_at`]), in scan order.
 pub(super) fn surfaces(points: &[[f64; 2]]) -> Vec<Option<Surface>> {
     (0..points.len()).map(|j| surface_at(points, j)).collect()
 }
+
+/// Neighbours farther apart than this per step in scan order are taken to lie on different
+/// surfaces ([`surface_at`]), metres.
+const MAX_GAP_M: f64 = 0.3;
 
 /// The reference's surface at point `j`. Its direction is the chord between the farthest
 /// points up to [`SPAN`] either side of `j` in scan order that lie near `j` for their gap in
@@ -324,9 +382,6 @@ pub(super) fn surfaces(points: &[[f64; 2]]) -> Vec<Option<Surface>> {
 /// those points lying on the chord, so the range noise of `j` alone does not place it. Else the
 /// line through `j` and its nearer neighbour; `None` for a lone point.
 fn surface_at(points: &[[f64; 2]], j: usize) -> Option<Surface> {
-    /// Neighbours farther apart than this per step in scan order are taken to lie on different
-    /// surfaces, metres.
-    const MAX_GAP_M: f64 = 0.3;
     /// How far a point may lie off the chord, metres (a corner within the span does not).
     const STRAIGHT_M: f64 = 0.02;
     let d2 = |a: [f64; 2], b: [f64; 2]| (b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2);
@@ -401,6 +456,47 @@ mod tests {
             xy: points.to_vec(),
             beam: (0..points.len()).collect(),
         })
+    }
+
+    /// A scan of 1° beams: a wall 5 m ahead (a surface at every point), an outlier 2 m out among
+    /// it (lone, but its beams lie 3.5 cm apart there: judged as a point), and a wall 30 m out
+    /// to one side, its beams 52 cm apart (no surface, and unresolved). A current point near
+    /// that far wall, between two of its beams, is not judged: the share counts the rest.
+    #[test]
+    fn far_points_between_sparse_beams_are_not_judged() {
+        let beam = |k: usize, r: f64| {
+            let a = (-30.0 + k as f64).to_radians();
+            [r * a.cos(), r * a.sin()]
+        };
+        let mut points: Vec<[f64; 2]> = (0..20)
+            .map(|k| beam(k, 5.0 / (-30.0 + k as f64).to_radians().cos()))
+            .collect();
+        points[10] = beam(10, 2.0);
+        points.extend((20..30).map(|k| beam(k, 30.0)));
+        let prepared = reference(&points);
+        assert!(!prepared.unresolved(5) && prepared.surface(5).is_some());
+        assert!(
+            prepared.surface(10).is_none() && !prepared.unresolved(10),
+            "the outlier"
+        );
+        assert!((20..30).all(|j| prepared.surface(j).is_none() && prepared.unresolved(j)));
+        // The current scan: the near wall's points where they are, and one point on the far
+        // wall's arc half-way between two beams (25 cm from each), at the identity.
+        let mut current: Vec<[f64; 2]> = (0..20).filter(|&k| k != 10).map(|k| points[k]).collect();
+        let a = (-30.0f64 + 24.5).to_radians();
+        current.push([30.0 * a.cos(), 30.0 * a.sin()]);
+        let q = TrustRule::default().assess(&prepared, &current, &Pose2::default());
+        assert_eq!(q.inliers, 19);
+        assert_eq!(
+            q.inlier_share, 1.0,
+            "the far point is left out, not counted off"
+        );
+        // A sixth as far, the same beams lie 8.7 cm apart: resolved.
+        let near: Vec<[f64; 2]> = points.iter().map(|p| [p[0] / 6.0, p[1] / 6.0]).collect();
+        assert!(
+            (20..30).all(|j| !reference(&near).unresolved(j)),
+            "5 m out: resolved"
+        );
     }
 
     /// A wall along x = 3 seen with ±1 cm of range noise and a far outlier among its points:
