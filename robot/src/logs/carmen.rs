@@ -226,7 +226,8 @@ mod tests {
         assert_eq!(scan.stamp, Stamp::from_secs_f64(1000.5));
     }
 
-    /// Readings of a log that declares 10 m, one scan a line, each with 10 readings.
+    /// The scans of a log that declares `max` as its usable range, one scan a line of 10
+    /// readings.
     fn declared(scans: &[[f64; 10]], max: &str) -> Vec<RangeScan> {
         let mut text = format!("PARAM robot_front_laser_max {max} nohost 0\n");
         for (k, ranges) in scans.iter().enumerate() {
