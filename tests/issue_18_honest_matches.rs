@@ -483,9 +483,10 @@ fn dense_scans_narrow_their_sigma_throughout() {
 /// line-assisted Lorentzian starts again from the best poses of a coarse correlative search
 /// 60 cm and 30° around the guess (`COARSE`), and keeps a trusted answer that fits clearly more
 /// points than its first. From guesses 20 cm and 10° off, two pairs the restarts leave beyond
-/// the row's 10 cm (seeds 2 and 8) end within it: nine over seeds 1–12, and none the other
-/// way, since Edmonton's readings beyond its declared 10 m are read (seed 2's pair 200, which
-/// this test held before, is found without it now). Over four other
+/// the row's 10 cm (seeds 6 and 8) end within it: six over seeds 1–12, and none the other way,
+/// since Edmonton's readings beyond its declared 10 m are read and its sparse scans asked a
+/// smaller share (seed 2's pairs 200 and 245, which this test held before, are found without
+/// it now). Over four other
 /// seeds of 300 pairs it is right more often on the large guesses, and Edmonton's sparse scans,
 /// whose corridors offer look-alike places within the window, lose no pair.
 #[test]
@@ -503,7 +504,7 @@ fn a_coarse_search_finds_what_the_restarts_miss() {
             .expect("the large guesses' row")
             .clone()
     };
-    for (seed, pair) in [(2, 245), (8, 237)] {
+    for (seed, pair) in [(6, 261), (8, 181)] {
         let set = large(&sets(300, seed));
         let one = CaseSet {
             cases: vec![set.cases[pair].clone()],
@@ -594,16 +595,16 @@ fn the_scans_dispute_a_corrected_pose_where_it_is_wrong() {
 }
 
 /// Edmonton's corrected poses are off by about a decimetre on some pairs too, where the scans
-/// do not dispute them twice over: on pairs 137 and 288 `lorentz-lines` and `pl-icp`, started
-/// from the same guess, land within 2 cm and 0.2° of each other, 12 cm from the log's pose,
-/// and both fit 5 points in 100 more of the current points than it (0.50 and 0.51 against
-/// 0.34; 0.36 and 0.37 against 0.26). Such failures are counted as agreed (and stay failures);
+/// do not dispute them twice over: on pairs 224 and 288 `lorentz-lines` and `pl-icp`, started
+/// from the same guess, land within 2 cm and 0.1° of each other, 11–12 cm from the log's pose,
+/// and both fit 5 points in 100 more of the current points than it (0.60 and 0.57 against
+/// 0.40; 0.36 and 0.37 against 0.26). Such failures are counted as agreed (and stay failures);
 /// on synthetic pairs, whose truth is exact, none is.
 #[test]
 fn two_matchers_agree_against_a_corrected_pose_where_it_is_off() {
     let kinds = [MatcherKind::LorentzLines, MatcherKind::PointToLine];
     for seed in [1, 7] {
-        for (pairs, pair) in [(135..140, 137), (286..291, 288)] {
+        for (pairs, pair) in [(222..227, 224), (286..291, 288)] {
             let start = pairs.start;
             let set = log_pairs("edmonton", pairs, seed);
             let mut outcomes = Vec::new();

@@ -1,7 +1,7 @@
 //! The one interface every scan matcher implements, and the pieces they share.
 
 use super::kdtree::KdTree;
-use super::quality::{MatchQuality, Surface, TrustRule, surfaces, unresolved};
+use super::quality::{MatchQuality, Surface, TrustRule, sparse, surfaces, unresolved};
 use super::scan::{RangeScan, ScanPoints};
 use crate::geometry::Pose2;
 use std::fmt;
@@ -62,6 +62,8 @@ pub struct Reference {
     surfaces: Vec<Option<Surface>>,
     /// Which points have no surface because the beams lie too far apart there.
     unresolved: Vec<bool>,
+    /// Whether its beams lie over 0.75° apart.
+    sparse: bool,
 }
 
 impl Reference {
@@ -70,7 +72,9 @@ impl Reference {
         let tree = KdTree::new(&points.xy);
         let surfaces = surfaces(&points.xy);
         let unresolved = unresolved(&points.xy, &points.beam, &surfaces);
+        let sparse = sparse(&points.xy, &points.beam);
         Reference {
+            sparse,
             points,
             tree,
             surfaces,
@@ -83,6 +87,12 @@ impl Reference {
     /// a current point by it.
     pub fn unresolved(&self, j: usize) -> bool {
         self.unresolved.get(j).copied().unwrap_or(false)
+    }
+
+    /// Whether the reference's beams lie over 0.75° apart (a SICK in its 1° mode): its surfaces
+    /// are sampled coarsely, and the trust rule asks a smaller share of inliers.
+    pub fn is_sparse(&self) -> bool {
+        self.sparse
     }
 
     /// The reference's surface at point `j`, if its neighbours give it a direction.

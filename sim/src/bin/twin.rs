@@ -66,7 +66,8 @@ enum Command {
     /// Input: {"ref": {"angle_min", "angle_increment", "range_max", "ranges": [...]}, "cur": {...},
     /// "guess": [x, y, theta]}; output: {"x", "y", "theta", "iterations", "converged" (the answer
     /// can be trusted), "settled", "correspondences", "quality": {"inliers", "inlier_share",
-    /// "rms_m", "sigma": [x, y, theta]}, "micros"}, or {"error": "..."} for a malformed line.
+    /// "rms_m", "sigma": [x, y, theta], "sparse", "step": [m, rad]}, "micros"}, or {"error": "..."}
+    /// for a malformed line.
     Match(commands::map::MatchArgs),
     /// Compare the scan matchers on the same pairs — the twin's in four worlds at 0 % and 20 %
     /// outliers, and the SLAM-corrected real logs — and print success, errors, time and how

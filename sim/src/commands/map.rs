@@ -379,8 +379,8 @@ pub fn map_main(args: MapArgs) -> Result<(), super::CommandError> {
 /// Input: {"ref": {"angle_min", "angle_increment", "range_max", "ranges": [...]}, "cur": {...},
 /// "guess": [x, y, theta]}; output: {"x", "y", "theta", "iterations", "converged" (the answer can
 /// be trusted), "settled" (the iterations stopped on a tiny step), "correspondences", "quality":
-/// {"inliers", "inlier_share", "rms_m", "sigma": [x, y, theta]}, "micros"}, or {"error": "..."}
-/// for a malformed line.
+/// {"inliers", "inlier_share", "rms_m", "sigma": [x, y, theta], "sparse", "step": [m, rad]},
+/// "micros"}, or {"error": "..."} for a malformed line.
 #[derive(Clone, Debug, clap::Args)]
 pub struct MatchArgs {
     /// The matcher: ls, lorentz, lorentz-lines, mbicp or pl-icp.
