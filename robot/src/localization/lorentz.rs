@@ -8,7 +8,7 @@ use super::kdtree::LastNearest;
 use super::lines::{Line, LineParams, lines_of};
 use super::matcher::{Convergence, MatchResult, Reference, ScanMatcher, solve3, transform_all};
 use super::quality::{TrustRule, polish_near};
-use super::scan::ScanPoints;
+use super::scan::{SPARSE_BEAM_STEP_RAD, ScanPoints, beam_step};
 use crate::geometry::{Pose2, wrap_angle};
 
 /// The thesis's σ schedule, in the unit [`Lorentz::SIGMA_UNIT_M`].
@@ -206,30 +206,6 @@ pub const FIRST_STEPS: u32 = 1;
 /// answers over seeds 1–12 but for one pair.
 pub const FIRST_SPREAD_MARGIN: f64 = 0.01;
 
-/// The angle between a scan's neighbouring beams: the median, over points of consecutive
-/// beams, of the angle between them seen from the laser (one arctangent of their cross and dot
-/// products). `None` with no two such points.
-pub fn beam_step(current: &ScanPoints) -> Option<f64> {
-    let mut steps: Vec<f64> = current
-        .xy
-        .windows(2)
-        .zip(current.beam.windows(2))
-        .filter(|(_, beams)| beams[1] == beams[0] + 1)
-        .map(|(p, _)| {
-            let (a, b) = (p[0], p[1]);
-            (a[0] * b[1] - a[1] * b[0])
-                .atan2(a[0] * b[0] + a[1] * b[1])
-                .abs()
-        })
-        .filter(|step| step.is_finite())
-        .collect();
-    if steps.is_empty() {
-        return None;
-    }
-    let middle = steps.len() / 2;
-    Some(*steps.select_nth_unstable_by(middle, f64::total_cmp).1)
-}
-
 /// How many times farther from its target than the nearest pair on the same reference point
 /// a pair of a dense scan may lie and still count ([`Lorentz::crowd_ratio`]): three, as the
 /// reference matcher's rule for doubles ([`PointToLine`](super::PointToLine)), here with the
@@ -371,7 +347,7 @@ impl Lorentz {
             restarts: RESTARTS.to_vec(),
             coarse: Some(COARSE),
             dense_sigmas_m: DENSE_SIGMAS.to_vec(),
-            dense_below_rad: 0.75f64.to_radians(),
+            dense_below_rad: SPARSE_BEAM_STEP_RAD,
             line_residuals_spread: Some(LINE_RESIDUALS_SPREAD),
             first_spread: Some(FIRST_SPREAD),
             first_max_steps: Some(FIRST_STEPS),

@@ -1,8 +1,8 @@
 //! The one interface every scan matcher implements, and the pieces they share.
 
 use super::kdtree::KdTree;
-use super::quality::{MatchQuality, Surface, TrustRule, sparse, surfaces, unresolved};
-use super::scan::{RangeScan, ScanPoints};
+use super::quality::{MatchQuality, Surface, TrustRule, surfaces, unresolved};
+use super::scan::{RangeScan, SPARSE_BEAM_STEP_RAD, ScanPoints, beam_step};
 use crate::geometry::Pose2;
 use std::fmt;
 use std::str::FromStr;
@@ -62,7 +62,7 @@ pub struct Reference {
     surfaces: Vec<Option<Surface>>,
     /// Which points have no surface because the beams lie too far apart there.
     unresolved: Vec<bool>,
-    /// Whether its beams lie over 0.75° apart.
+    /// Whether its beams lie 0.75° apart or more ([`SPARSE_BEAM_STEP_RAD`]).
     sparse: bool,
 }
 
@@ -72,7 +72,7 @@ impl Reference {
         let tree = KdTree::new(&points.xy);
         let surfaces = surfaces(&points.xy);
         let unresolved = unresolved(&points.xy, &points.beam, &surfaces);
-        let sparse = sparse(&points.xy, &points.beam);
+        let sparse = beam_step(&points).is_some_and(|step| step >= SPARSE_BEAM_STEP_RAD);
         Reference {
             sparse,
             points,
@@ -89,8 +89,9 @@ impl Reference {
         self.unresolved.get(j).copied().unwrap_or(false)
     }
 
-    /// Whether the reference's beams lie over 0.75° apart (a SICK in its 1° mode): its surfaces
-    /// are sampled coarsely, and the trust rule asks a smaller share of inliers.
+    /// Whether the reference's beams lie 0.75° apart or more (a SICK in its 1° mode,
+    /// [`SPARSE_BEAM_STEP_RAD`](super::SPARSE_BEAM_STEP_RAD)): its surfaces are sampled
+    /// coarsely, and the trust rule asks a smaller share of inliers.
     pub fn is_sparse(&self) -> bool {
         self.sparse
     }

@@ -36,7 +36,7 @@ pub use kdtree::{KdTree, LastNearest};
 pub use level::{LEVEL_TOLERANCE_RAD, LevelLocaliser};
 pub use lorentz::{
     COARSE, CROWD_RATIO, DENSE_SIGMAS, EARLY_CONVERGENCE, FIRST_SPREAD, FIRST_SPREAD_MARGIN,
-    FIRST_STEPS, LINE_RESIDUALS_SPREAD, Lorentz, THESIS_SIGMAS, WIDE_SIGMAS, beam_step,
+    FIRST_STEPS, LINE_RESIDUALS_SPREAD, Lorentz, THESIS_SIGMAS, WIDE_SIGMAS,
 };
 pub use map::{MapBuilder, MapConfig, MatchStats, Placed};
 pub use matcher::{
@@ -46,4 +46,4 @@ pub use matcher::{
 pub use mbicp::Mbicp;
 pub use plicp::PointToLine;
 pub use quality::{MatchQuality, TrustRule, polish};
-pub use scan::{RangeScan, ScanPoints};
+pub use scan::{RangeScan, SPARSE_BEAM_STEP_RAD, ScanPoints, beam_step};

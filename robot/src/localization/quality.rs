@@ -41,9 +41,11 @@ pub struct MatchQuality {
     /// Standard deviations of the estimate's x and y (metres) and θ (radians) from the inliers'
     /// information; infinite where they leave a direction free.
     pub sigma: [f64; 3],
-    /// Whether the reference scan is sparse (its beams over 0.75° apart, as a SICK's in its 1°
-    /// mode): its surfaces are sampled coarsely, and [`TrustRule::min_inlier_share_sparse`]
-    /// applies.
+    /// Whether the reference scan is sparse (its beams 0.75° apart or more, as a SICK's in its
+    /// 1° mode, [`SPARSE_BEAM_STEP_RAD`]): its surfaces are sampled coarsely, and
+    /// [`TrustRule::min_inlier_share_sparse`] applies.
+    ///
+    /// [`SPARSE_BEAM_STEP_RAD`]: super::SPARSE_BEAM_STEP_RAD
     pub sparse: bool,
     /// How far one Gauss–Newton step of the inliers' point-to-line error would move the answer:
     /// metres and radians. An answer at the minimum of that error does not move; one pulled
@@ -388,30 +390,6 @@ pub(super) fn unresolved(
 /// The reference's surface at each of its points ([`surface_at`]), in scan order.
 pub(super) fn surfaces(points: &[[f64; 2]]) -> Vec<Option<Surface>> {
     (0..points.len()).map(|j| surface_at(points, j)).collect()
-}
-
-/// A reference whose beams lie farther apart than this (the median over its neighbouring
-/// beams) is sparse ([`MatchQuality::sparse`]): 0.75°, between the SICK's 0.5° and 1° modes.
-pub const SPARSE_BEAMS_RAD: f64 = 0.013_089_969_389_957_472;
-
-/// Whether more than half of the pairs of neighbouring beams among `points` (by `beam`
-/// number) turn more than [`SPARSE_BEAMS_RAD`] a beam, as seen from the laser.
-pub(super) fn sparse(points: &[[f64; 2]], beam: &[usize]) -> bool {
-    let limit = SPARSE_BEAMS_RAD.sin();
-    let (mut pairs, mut wide) = (0usize, 0usize);
-    for (p, b) in points.windows(2).zip(beam.windows(2)) {
-        if b[1] != b[0] + 1 {
-            continue;
-        }
-        let (a, c) = (p[0], p[1]);
-        let cross = (a[0] * c[1] - a[1] * c[0]).abs();
-        let norms = a[0].hypot(a[1]) * c[0].hypot(c[1]);
-        if norms.is_finite() && norms > 0.0 {
-            pairs += 1;
-            wide += usize::from(cross > limit * norms);
-        }
-    }
-    2 * wide > pairs
 }
 
 /// Neighbours farther apart than this per step in scan order are taken to lie on different

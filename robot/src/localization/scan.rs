@@ -117,3 +117,33 @@ impl ScanPoints {
         self.xy.iter().all(|&p| plausible(p))
     }
 }
+
+/// The beam step from which a scan counts as sparse: 0.75°, between the SICK's 0.5° and 1°
+/// modes. [`Lorentz::with_lines`](super::Lorentz::with_lines) keeps its narrowing σ schedule
+/// for scans below it, and the trust rule asks a smaller share of inliers against a reference
+/// at or above it ([`Reference::is_sparse`](super::Reference::is_sparse)).
+pub const SPARSE_BEAM_STEP_RAD: f64 = 0.75 * (std::f64::consts::PI / 180.0);
+
+/// The angle between a scan's neighbouring beams: the median, over points of consecutive
+/// beams, of the angle between them seen from the laser (one arctangent of their cross and dot
+/// products). `None` with no two such points.
+pub fn beam_step(current: &ScanPoints) -> Option<f64> {
+    let mut steps: Vec<f64> = current
+        .xy
+        .windows(2)
+        .zip(current.beam.windows(2))
+        .filter(|(_, beams)| beams[1] == beams[0] + 1)
+        .map(|(p, _)| {
+            let (a, b) = (p[0], p[1]);
+            (a[0] * b[1] - a[1] * b[0])
+                .atan2(a[0] * b[0] + a[1] * b[1])
+                .abs()
+        })
+        .filter(|step| step.is_finite())
+        .collect();
+    if steps.is_empty() {
+        return None;
+    }
+    let middle = steps.len() / 2;
+    Some(*steps.select_nth_unstable_by(middle, f64::total_cmp).1)
+}
