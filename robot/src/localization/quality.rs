@@ -22,6 +22,7 @@
 
 use super::kdtree::LastNearest;
 use super::matcher::{Reference, solve3};
+use super::scan::turn_between;
 use crate::geometry::Pose2;
 
 /// The figures a match is judged by.
@@ -379,10 +380,7 @@ pub(super) fn unresolved(
             if beams == 0 {
                 return false;
             }
-            let turn = (p[0] * q[1] - p[1] * q[0])
-                .abs()
-                .atan2(p[0] * q[0] + p[1] * q[1]);
-            p[0].hypot(p[1]) * turn / beams as f64 > MAX_GAP_M
+            p[0].hypot(p[1]) * turn_between(p, q) / beams as f64 > MAX_GAP_M
         })
         .collect()
 }

@@ -124,6 +124,14 @@ impl ScanPoints {
 /// at or above it ([`Reference::is_sparse`](super::Reference::is_sparse)).
 pub const SPARSE_BEAM_STEP_RAD: f64 = 0.75 * (std::f64::consts::PI / 180.0);
 
+/// The angle between the points `a` and `b` as seen from the laser (the origin), radians: one
+/// arctangent of their cross and dot products.
+pub(super) fn turn_between(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] * b[1] - a[1] * b[0])
+        .atan2(a[0] * b[0] + a[1] * b[1])
+        .abs()
+}
+
 /// The angle between a scan's neighbouring beams: the median, over points of consecutive
 /// beams, of the angle between them seen from the laser (one arctangent of their cross and dot
 /// products). `None` with no two such points.
@@ -133,12 +141,7 @@ pub fn beam_step(current: &ScanPoints) -> Option<f64> {
         .windows(2)
         .zip(current.beam.windows(2))
         .filter(|(_, beams)| beams[1] == beams[0] + 1)
-        .map(|(p, _)| {
-            let (a, b) = (p[0], p[1]);
-            (a[0] * b[1] - a[1] * b[0])
-                .atan2(a[0] * b[0] + a[1] * b[1])
-                .abs()
-        })
+        .map(|(p, _)| turn_between(p[0], p[1]))
         .filter(|step| step.is_finite())
         .collect();
     if steps.is_empty() {
