@@ -595,16 +595,16 @@ fn the_scans_dispute_a_corrected_pose_where_it_is_wrong() {
 }
 
 /// Edmonton's corrected poses are off by about a decimetre on some pairs too, where the scans
-/// do not dispute them twice over: on pairs 224 and 288 `lorentz-lines` and `pl-icp`, started
-/// from the same guess, land within 2 cm and 0.1° of each other, 11–12 cm from the log's pose,
-/// and both fit 5 points in 100 more of the current points than it (0.60 and 0.57 against
-/// 0.40; 0.36 and 0.37 against 0.26). Such failures are counted as agreed (and stay failures);
+/// do not dispute them twice over: on pairs 153 and 288 `lorentz-lines` and `pl-icp`, started
+/// from the same guess, land within 2 cm and 0.2° of each other, 10–12 cm from the log's pose,
+/// and both fit 5 points in 100 more of the current points than it (0.44 and 0.43 against
+/// 0.36; 0.36 and 0.37 against 0.26). Both are agreed on every seed of 1–20. Such failures are counted as agreed (and stay failures);
 /// on synthetic pairs, whose truth is exact, none is.
 #[test]
 fn two_matchers_agree_against_a_corrected_pose_where_it_is_off() {
     let kinds = [MatcherKind::LorentzLines, MatcherKind::PointToLine];
     for seed in [1, 7] {
-        for (pairs, pair) in [(222..227, 224), (286..291, 288)] {
+        for (pairs, pair) in [(151..156, 153), (286..291, 288)] {
             let start = pairs.start;
             let set = log_pairs("edmonton", pairs, seed);
             let mut outcomes = Vec::new();
