@@ -97,13 +97,13 @@ fn detail_area(
 }
 
 /// The plan view of `min`..`max` fitted into a `size`-pixel square whose view starts at
-/// `left` pixels (its grid's labels to the left of that).
-fn fitted(min: [f64; 2], max: [f64; 2], left: f64, size: f64) -> Plan {
+/// `(left, top)` pixels (its grid's labels to the left of and above that).
+fn fitted(min: [f64; 2], max: [f64; 2], (left, top): (f64, f64), size: f64) -> Plan {
     let span = (max[0] - min[0]).max(max[1] - min[1]).max(1e-3);
     Plan {
         min,
         max,
-        origin: [left, 56.0 + Plan::ABOVE],
+        origin: [left, top],
         scale: size / span,
     }
 }
@@ -138,9 +138,11 @@ fn render(
     let mut views = Vec::new();
     let width = match detail {
         Some((dmin, dmax)) => {
-            let overview = fitted(min, max, Plan::LEFT + 10.0, VIEW_BOX);
+            // Below the title and the views' captions.
+            let top = 56.0 + Plan::ABOVE;
+            let overview = fitted(min, max, (Plan::LEFT + 10.0, top), VIEW_BOX);
             let left = overview.origin[0] + overview.width() + 50.0 + Plan::LEFT;
-            let detail = fitted(dmin, dmax, left, VIEW_BOX);
+            let detail = fitted(dmin, dmax, (left, top), VIEW_BOX);
             views.push(("overview", overview));
             views.push((DETAIL, detail));
             // Room for the detail's caption too (at most 9 pixels a character at 15 pixels).
@@ -149,7 +151,8 @@ fn render(
         }
         None => {
             let inner = WIDTH - Plan::LEFT - 30.0;
-            views.push(("", fitted(min, max, Plan::LEFT + 10.0, inner)));
+            let top = 40.0 + Plan::ABOVE;
+            views.push(("", fitted(min, max, (Plan::LEFT + 10.0, top), inner)));
             WIDTH
         }
     };
