@@ -35,8 +35,8 @@ pub use icp::LeastSquares;
 pub use kdtree::{KdTree, LastNearest};
 pub use level::{LEVEL_TOLERANCE_RAD, LevelLocaliser};
 pub use lorentz::{
-    COARSE, CROWD_RATIO, DENSE_SIGMAS, EARLY_CONVERGENCE, FIRST_SPREAD, FIRST_SPREAD_MARGIN,
-    FIRST_STEPS, LINE_RESIDUALS_SPREAD, Lorentz, THESIS_SIGMAS, WIDE_SIGMAS,
+    COARSE, CROWD_RATIO, DENSE_SIGMAS, EARLY_CONVERGENCE, FIRST_PASS_ENOUGH, FIRST_SPREAD,
+    FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD, Lorentz, THESIS_SIGMAS, WIDE_SIGMAS,
 };
 pub use map::{MapBuilder, MapConfig, MatchStats, Placed};
 pub use matcher::{
