@@ -146,6 +146,16 @@ pub struct Lorentz {
     /// thesis; false (the default) runs such a pass to its cap, and [`Lorentz::with_lines`]
     /// stops it.
     pub stop_on_cycles: bool,
+    /// For dense scans (as `dense_sigmas_m`), in the first σ pass of every schedule but the
+    /// wide one: a pair that no reference line holds (none grew at its nearest reference point,
+    /// or the current point projects past its ends) is held instead to the reference's surface
+    /// at that point, the line the trust rule measures against, when the surface was fitted to
+    /// at least this many points (a straight piece of it) and the projection falls within its
+    /// reach: its target is the projection, and where the search counts distances to lines
+    /// ([`Lorentz::line_residuals_spread`]) it counts its distance to that line alone. Not in
+    /// the thesis; `None` (the default) leaves such pairs to their nearest points, and
+    /// [`Lorentz::with_lines`] has [`FIRST_PASS_SURFACE_POINTS`].
+    pub first_pass_surfaces: Option<usize>,
 }
 
 /// The schedule of [`Lorentz::with_lines`] for dense scans (beams under 0.75° apart): σ 5 cm,
@@ -230,6 +240,27 @@ pub const FIRST_STEPS: u32 = 1;
 /// largest from 0.42 to 0.55°; leaving out only the middle pass (5 → 0.5 cm) lost 5 pairs of
 /// 6,000 with 20 % outliers and 5 of the large guesses.
 pub const FIRST_PASS_ENOUGH: (f64, f64) = (0.02, 0.7);
+
+/// The fewest points a reference surface must have been fitted to for [`Lorentz::with_lines`]
+/// to hold a pair no line holds to it in the first σ pass of a dense scan
+/// ([`Lorentz::first_pass_surfaces`]): seven, three either side of the point and the point
+/// itself, all on the chord, so a straight piece of surface. Counted in that pass (seed 1,
+/// the synthetic pairs without outliers), 37 % of the pairs had no line to be held to: grown
+/// lines need five points within 2 cm RMS and end where the points do, so a corner, a short
+/// face or a point past a line's end paired with the nearest point alone and pulled the
+/// estimate toward it, point to point, search after search. Over seeds 1–20 of `twin matchers`
+/// (6,000 pairs a row, Freiburg 101 5,820), with [`FIRST_PASS_ENOUGH`] and
+/// [`Lorentz::stop_on_cycles`] before and after: right answers 5998 → 5998 (synthetic, 0 %),
+/// 5983 → 5982 (20 %), 5989 → 5990 (Belgioioso), 5716 → 5716 (Freiburg 101), 5817 → 5817
+/// (Edmonton, not dense: the same answers) and 5890 → 5892 (large guesses); median
+/// correspondence searches a pair 12 → 7, 31 → 30, 18 → 16, 20 → 19, 55 → 55 and 55 → 48; the
+/// synthetic median error 1.63 → 1.62 mm. Five points (any straight piece of the chord) took
+/// fewer searches still with 20 % outliers (31 → 24), but turned the Table 5.1 study's worst
+/// heading error at 20 % from 0.42 to 0.52° (trial 14132, the far outliers' torque); in every
+/// pass, not only the first, the study's mean e_t at 20 % rose by 0.009 mm and that worst
+/// heading error to 0.63°; every surface, however short, in every pass, lost 3 of
+/// Belgioioso's pairs in 1,200 and raised that worst heading error to 0.56°.
+pub const FIRST_PASS_SURFACE_POINTS: usize = super::quality::SURFACE_POINTS;
 
 /// How many fewer of the current points (as a share) the answer matched again with
 /// [`LINE_RESIDUALS_SPREAD`] may fit than a loose first answer and still be kept
@@ -385,6 +416,7 @@ impl Lorentz {
             first_max_steps: Some(FIRST_STEPS),
             first_pass_enough: Some(FIRST_PASS_ENOUGH),
             stop_on_cycles: true,
+            first_pass_surfaces: Some(FIRST_PASS_SURFACE_POINTS),
             early_convergence: Some(EARLY_CONVERGENCE),
             crowd_ratio: Some(CROWD_RATIO),
             ..Lorentz::default()
@@ -711,6 +743,7 @@ impl Default for Lorentz {
             first_max_steps: None,
             first_pass_enough: None,
             stop_on_cycles: false,
+            first_pass_surfaces: None,
         }
     }
 }
@@ -926,6 +959,9 @@ impl Lorentz {
             .filter(|_| crowd.is_some())
             .map(|(distance, share)| (distance * distance, share));
         let mut close = 0;
+        // With `first_pass_surfaces` on a dense scan: the fewest points a surface that holds a
+        // pair must have been fitted to.
+        let surfaces = self.first_pass_surfaces.filter(|_| crowd.is_some());
         for (pass, &sigma) in sigmas.iter().enumerate() {
             if pass == 1
                 && let Some((_, share)) = enough
@@ -968,6 +1004,16 @@ impl Lorentz {
                                 normal = Some(line.normal());
                             }
                         }
+                    }
+                    if normal.is_none()
+                        && pass == 0
+                        && let Some(fewest) = surfaces
+                        && let Some(surface) = reference.surface(j)
+                        && surface.points >= fewest
+                        && let Some(on_surface) = surface.projection(*p)
+                    {
+                        target = on_surface;
+                        normal = Some(surface.normal);
                     }
                     let beyond = target == reference.points.xy[j] && reference.is_edge(j);
                     if self.drop_edge_pairs && beyond {

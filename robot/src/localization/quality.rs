@@ -309,6 +309,7 @@ fn constraints<'a>(
                 normal: n,
                 anchor: a,
                 reach,
+                ..
             }) => {
                 Constraint {
                     residual: n[0] * (q[0] - a[0]) + n[1] * (q[1] - a[1]),
@@ -349,7 +350,27 @@ pub(super) struct Surface {
     /// How far along the line from `anchor` the points it was fitted to reach, metres: past
     /// that (and [`END_MARGIN_M`]) the polish does not hold a point to it.
     pub reach: f64,
+    /// How many reference points the line was fitted to: up to `2 SPAN + 1` (all of them on
+    /// the chord: a straight piece of surface), 2 for the line through a point and its nearer
+    /// neighbour.
+    pub points: usize,
 }
+
+impl Surface {
+    /// The orthogonal projection of `p` on the line, when it falls within `reach` and
+    /// [`END_MARGIN_M`] of `anchor`.
+    pub(super) fn projection(&self, p: [f64; 2]) -> Option<[f64; 2]> {
+        let (n, a) = (self.normal, self.anchor);
+        let (ax, ay) = (p[0] - a[0], p[1] - a[1]);
+        let off = n[0] * ax + n[1] * ay;
+        let along = (n[1] * ax - n[0] * ay).abs();
+        (along <= self.reach + END_MARGIN_M).then(|| [p[0] - off * n[0], p[1] - off * n[1]])
+    }
+}
+
+/// The most points a [`Surface`] is fitted to: all of `SPAN` either side of its point and the
+/// point itself.
+pub(super) const SURFACE_POINTS: usize = 2 * SPAN + 1;
 
 /// Whether each reference point is *unresolved*: it has no surface, and its beam and the next
 /// one (in the reference's scan, at its range) lie farther apart than [`MAX_GAP_M`], so no
@@ -436,6 +457,7 @@ fn surface_at(points: &[[f64; 2]], j: usize) -> Option<Surface> {
                 normal: n,
                 anchor,
                 reach: on().map(|k| along(points[k])).fold(0.0, f64::max),
+                points: count as usize,
             });
         }
     }
@@ -449,6 +471,7 @@ fn surface_at(points: &[[f64; 2]], j: usize) -> Option<Surface> {
         normal,
         anchor: a,
         reach: d2(a, points[k]).sqrt(),
+        points: 2,
     })
 }
 
