@@ -493,6 +493,26 @@ mod tests {
         points
     }
 
+    /// A surface counts the points it was fitted to: all seven on a straight wall, fewer where
+    /// the corner lies within its span; a point projects onto it only within its reach and
+    /// `END_MARGIN_M` past it.
+    #[test]
+    fn surfaces_count_their_points_and_project_within_their_reach() {
+        let points = corner();
+        let wall = surface_at(&points, 50).expect("a surface on the wall");
+        assert_eq!(wall.points, SURFACE_POINTS);
+        let foot = wall.projection([3.3, 0.0]).expect("beside the surface");
+        assert!(
+            (foot[0] - 3.0).abs() < 1e-9 && foot[1].abs() < 1e-9,
+            "{foot:?}"
+        );
+        // The wall's seven points reach 12 cm either side of the point (y = 0).
+        assert!(wall.projection([3.3, 0.16]).is_some());
+        assert!(wall.projection([3.3, 0.2]).is_none());
+        let at_corner = surface_at(&points, 99).expect("a surface at the corner");
+        assert!(at_corner.points < SURFACE_POINTS, "{at_corner:?}");
+    }
+
     fn reference(points: &[[f64; 2]]) -> Reference {
         Reference::new(ScanPoints {
             xy: points.to_vec(),
