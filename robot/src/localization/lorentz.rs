@@ -614,14 +614,15 @@ impl Crowding {
     }
 
     /// Notes the next pair: the current point `p` (moved), paired with reference point `j`
-    /// through `target`.
-    fn note(&mut self, j: usize, p: [f64; 2], target: [f64; 2]) {
+    /// through `target`; its squared distance to the target back.
+    fn note(&mut self, j: usize, p: [f64; 2], target: [f64; 2]) -> f64 {
         let (dx, dy) = (target[0] - p[0], target[1] - p[1]);
         let d2 = dx * dx + dy * dy;
         self.pairs.push((j, d2));
         if d2 < self.nearest[j] {
             self.nearest[j] = d2;
         }
+        d2
     }
 
     /// Leaves out of the noted pairs those more than `ratio` times farther from their targets
@@ -1023,11 +1024,11 @@ impl Lorentz {
                     targets.push(target);
                     normals.push(normal);
                     if let Some(crowding) = &mut crowding {
-                        crowding.note(j, *p, target);
-                    }
-                    if let Some((near2, _)) = enough {
-                        let (dx, dy) = (target[0] - p[0], target[1] - p[1]);
-                        close += usize::from(dx * dx + dy * dy < near2);
+                        let d2 = crowding.note(j, *p, target);
+                        // `enough` is set only with the crowd rule (dense scans).
+                        if let Some((near2, _)) = enough {
+                            close += usize::from(d2 < near2);
+                        }
                     }
                 }
                 if let Some(crowding) = &mut crowding {

@@ -305,18 +305,14 @@ fn constraints<'a>(
         };
         hint = Some(j);
         Some(match reference.surface(j) {
-            Some(&Surface {
-                normal: n,
-                anchor: a,
-                reach,
-                ..
-            }) => {
+            Some(surface) => {
+                let (residual, within) = surface.place(q);
+                let n = surface.normal;
                 Constraint {
-                    residual: n[0] * (q[0] - a[0]) + n[1] * (q[1] - a[1]),
+                    residual,
                     // ∂q/∂θ = (−r_y, r_x).
                     jacobian: Some([n[0], n[1], -n[0] * r[1] + n[1] * r[0]]),
-                    beyond: (n[1] * (q[0] - a[0]) - n[0] * (q[1] - a[1])).abs()
-                        > reach + END_MARGIN_M,
+                    beyond: !within,
                     judged: true,
                 }
             }
@@ -357,14 +353,22 @@ pub(super) struct Surface {
 }
 
 impl Surface {
-    /// The orthogonal projection of `p` on the line, when it falls within `reach` and
-    /// [`END_MARGIN_M`] of `anchor`.
-    pub(super) fn projection(&self, p: [f64; 2]) -> Option<[f64; 2]> {
+    /// The signed distance of `p` from the line (along its normal), and whether `p` lies within
+    /// `reach` and [`END_MARGIN_M`] of `anchor` along it (past that, the line's direction,
+    /// extrapolated, would twist it).
+    pub(super) fn place(&self, p: [f64; 2]) -> (f64, bool) {
         let (n, a) = (self.normal, self.anchor);
         let (ax, ay) = (p[0] - a[0], p[1] - a[1]);
-        let off = n[0] * ax + n[1] * ay;
         let along = (n[1] * ax - n[0] * ay).abs();
-        (along <= self.reach + END_MARGIN_M).then(|| [p[0] - off * n[0], p[1] - off * n[1]])
+        (n[0] * ax + n[1] * ay, along <= self.reach + END_MARGIN_M)
+    }
+
+    /// The orthogonal projection of `p` on the line, when it falls within `reach` and
+    /// [`END_MARGIN_M`] of `anchor` ([`Surface::place`]).
+    pub(super) fn projection(&self, p: [f64; 2]) -> Option<[f64; 2]> {
+        let (off, within) = self.place(p);
+        let n = self.normal;
+        within.then(|| [p[0] - off * n[0], p[1] - off * n[1]])
     }
 }
 
