@@ -230,13 +230,17 @@ pub fn polish(
     // Each point's last nearest reference point, kept from round to round: the pose moves
     // little, and the search is skipped while no other point can have come nearer.
     let mut last = vec![None; current.len()];
-    polish_near(reference, current, pose, (rounds, c, gate), &mut last)
+    polish_near(reference, current, pose, (rounds, c, gate), None, &mut last).0
 }
 
 /// [`polish`] with each current point's last nearest reference point kept in `last` (one for
 /// each current point, as [`KdTree::nearest_cached`] keeps them), from before the polish and
 /// for after it: the same answer, searched less when the points were searched for near there
-/// before (by the matcher whose answer is polished).
+/// before (by the matcher whose answer is polished). With `more` = `(turn_rad, extra)`, the
+/// rounds go on past `rounds`, at most `extra` more, while the last round still turned the
+/// estimate by more than `turn_rad`: an answer the Cauchy weights hold back creeps a tenth
+/// of a degree a round ([`POLISH_MORE`](super::POLISH_MORE)). The polished pose, and where
+/// more rounds moved it, the pose after `rounds`.
 ///
 /// [`KdTree::nearest_cached`]: super::KdTree::nearest_cached
 pub fn polish_near(
@@ -244,9 +248,12 @@ pub fn polish_near(
     current: &[[f64; 2]],
     mut pose: Pose2,
     (rounds, c, gate): (usize, f64, f64),
+    more: Option<(f64, usize)>,
     last: &mut [Option<LastNearest>],
-) -> Pose2 {
-    for _ in 0..rounds {
+) -> (Pose2, Option<Pose2>) {
+    let (turn, extra) = more.unwrap_or((0.0, 0));
+    let mut after_rounds = None;
+    for round in 0..rounds + extra {
         let mut h = [[0.0f64; 3]; 3];
         let mut g = [0.0f64; 3];
         for constraint in constraints(reference, current, &pose, Some(&mut *last)) {
@@ -265,8 +272,14 @@ pub fn polish_near(
         if d[0].hypot(d[1]) < 1e-6 && d[2].abs() < 1e-7 {
             break;
         }
+        if round + 1 >= rounds {
+            if d[2].abs() <= turn {
+                break;
+            }
+            after_rounds.get_or_insert(pose);
+        }
     }
-    pose
+    (pose, after_rounds.filter(|&p| p != pose))
 }
 
 /// How far one current point, moved by the pose, lies from the reference's surface.
@@ -693,7 +706,15 @@ mod tests {
         .into_iter()
         .enumerate()
         {
-            let cached = polish_near(&reference, &current, start, (5, 0.01, 0.05), &mut last);
+            let cached = polish_near(
+                &reference,
+                &current,
+                start,
+                (5, 0.01, 0.05),
+                None,
+                &mut last,
+            )
+            .0;
             let fresh = polish(&reference, &current, start, 5, 0.01, 0.05);
             assert_eq!(cached, fresh, "start {k}");
             let judged = rule.assess_near(&reference, &current, &cached, Some(&mut last));
