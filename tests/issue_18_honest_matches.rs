@@ -716,30 +716,41 @@ fn twin_matchers_shows_a_pair() {
     }
 }
 
-/// Two line-assisted Lorentzians side by side on every row of `sets(150, seed)` for each of
-/// `seeds`: per row, each one's right answers and median correspondence searches a pair.
-/// Edmonton's sparse scans take neither matcher's dense-scan rules, so there the two must give
-/// the same answers.
-fn rows_side_by_side(
+/// Two line-assisted Lorentzians side by side on every pair of `sets(150, seed)` for each of
+/// `seeds`, each pair's two answers handed to `visit`. Edmonton's sparse scans take neither
+/// matcher's dense-scan rules, so there the two must give the same answers.
+fn each_pair_side_by_side(
     matchers: [&robot::localization::Lorentz; 2],
     seeds: [u64; 2],
-) -> BTreeMap<String, ([usize; 2], [u32; 2])> {
-    let mut rows: BTreeMap<String, ([usize; 2], [Vec<u32>; 2])> = BTreeMap::new();
+    mut visit: impl FnMut(&CaseSet, &matchers::Case, [&robot::localization::MatchResult; 2]),
+) {
     for seed in seeds {
         for set in sets(150, seed) {
-            let (right, searches) = rows.entry(set.name.clone()).or_default();
             for c in &set.cases {
                 let [a, b] = matchers.map(|m| m.match_scans(&c.reference, &c.current, c.guess));
                 if set.name.contains("edmonton") {
                     assert_eq!(a, b, "seed {seed}: Edmonton's sparse scans are not changed");
                 }
-                for (k, r) in [a, b].iter().enumerate() {
-                    right[k] += usize::from(is_right(&set, c, r));
-                    searches[k].push(r.iterations);
-                }
+                visit(&set, c, [&a, &b]);
             }
         }
     }
+}
+
+/// [`each_pair_side_by_side`], per row: each matcher's right answers and median
+/// correspondence searches a pair.
+fn rows_side_by_side(
+    matchers: [&robot::localization::Lorentz; 2],
+    seeds: [u64; 2],
+) -> BTreeMap<String, ([usize; 2], [u32; 2])> {
+    let mut rows: BTreeMap<String, ([usize; 2], [Vec<u32>; 2])> = BTreeMap::new();
+    each_pair_side_by_side(matchers, seeds, |set, c, answers| {
+        let (right, searches) = rows.entry(set.name.clone()).or_default();
+        for (k, r) in answers.into_iter().enumerate() {
+            right[k] += usize::from(is_right(set, c, r));
+            searches[k].push(r.iterations);
+        }
+    });
     assert_eq!(rows.len(), 6, "every row of the table");
     rows.into_iter()
         .map(|(name, (right, mut searches))| {
@@ -1079,23 +1090,14 @@ fn a_polish_that_still_turns_goes_on() {
         ..Lorentz::with_lines()
     };
     let mut rows: BTreeMap<String, ([usize; 2], [f64; 2], usize)> = BTreeMap::new();
-    for seed in [32, 33] {
-        for set in sets(150, seed) {
-            let (right, heading, changed) = rows.entry(set.name.clone()).or_default();
-            for c in &set.cases {
-                let [a, b] =
-                    [&five_rounds, &now].map(|m| m.match_scans(&c.reference, &c.current, c.guess));
-                if set.name.contains("edmonton") {
-                    assert_eq!(a, b, "seed {seed}: Edmonton's sparse scans are not changed");
-                }
-                *changed += usize::from(a.pose != b.pose);
-                for (k, r) in [a, b].iter().enumerate() {
-                    right[k] += usize::from(is_right(&set, c, r));
-                    heading[k] += c.truth.relative(&r.pose).theta.abs().to_degrees();
-                }
-            }
+    each_pair_side_by_side([&five_rounds, &now], [32, 33], |set, c, [a, b]| {
+        let (right, heading, changed) = rows.entry(set.name.clone()).or_default();
+        *changed += usize::from(a.pose != b.pose);
+        for (k, r) in [a, b].into_iter().enumerate() {
+            right[k] += usize::from(is_right(set, c, r));
+            heading[k] += c.truth.relative(&r.pose).theta.abs().to_degrees();
         }
-    }
+    });
     assert_eq!(rows.len(), 6, "every row of the table");
     for (name, (right, heading, changed)) in &rows {
         println!("{name}: right {right:?}, heading errors summed {heading:?}°, {changed} changed");
