@@ -272,7 +272,7 @@ pub fn polish_near(
         if d[0].hypot(d[1]) < 1e-6 && d[2].abs() < 1e-7 {
             break;
         }
-        if round + 1 >= rounds {
+        if extra > 0 && round + 1 >= rounds {
             if d[2].abs() <= turn {
                 break;
             }
