@@ -70,9 +70,11 @@ pub struct Lorentz {
     /// and 1.9 mm once the reference's surfaces were fitted to their points' mean, skipping
     /// outliers.
     pub polish_rounds: usize,
-    /// On a dense scan, the polish goes on past `polish_rounds` while its last round still
-    /// turned the estimate by more than the first figure (radians), at most the second figure
-    /// more rounds. Not in the thesis; `None` (the default) stops at `polish_rounds`, and
+    /// For dense scans (as `dense_sigmas_m`), after every schedule but the wide one: the
+    /// polish goes on past `polish_rounds` while its last round still turned the estimate by
+    /// more than the first figure (radians), at most the second figure more rounds, and its
+    /// answer is kept unless the pose after `polish_rounds` fits more of the current points.
+    /// Not in the thesis; `None` (the default) stops at `polish_rounds`, and
     /// [`Lorentz::with_lines`] has [`POLISH_MORE`].
     pub polish_more: Option<(f64, usize)>,
     /// With the polish: the answer from before the last σ pass is polished too, and kept when
@@ -1099,6 +1101,7 @@ impl Lorentz {
         // The polish and the judgement search near where the passes did: `last` goes on.
         let mut after_rounds = None;
         if self.polish_rounds > 0 {
+            // The crowd rule marks a dense scan's schedules but the wide one, as above.
             let more = self.polish_more.filter(|_| crowd.is_some());
             (result.pose, after_rounds) = self.polish(reference, current, result.pose, more, last);
         }
