@@ -2,7 +2,7 @@
 
 use super::kdtree::KdTree;
 use super::quality::{MatchQuality, Surface, TrustRule, surfaces, unresolved};
-use super::scan::{RangeScan, SPARSE_BEAM_STEP_RAD, ScanPoints, beam_step};
+use super::scan::{RangeScan, SPARSE_BEAM_STEP_RAD, ScanPoints, beam_step_below};
 use crate::geometry::Pose2;
 use std::fmt;
 use std::str::FromStr;
@@ -72,7 +72,7 @@ impl Reference {
         let tree = KdTree::new(&points.xy);
         let surfaces = surfaces(&points.xy);
         let unresolved = unresolved(&points.xy, &points.beam, &surfaces);
-        let sparse = beam_step(&points).is_some_and(|step| step >= SPARSE_BEAM_STEP_RAD);
+        let sparse = beam_step_below(&points, SPARSE_BEAM_STEP_RAD) == Some(false);
         Reference {
             sparse,
             points,

@@ -35,8 +35,8 @@ pub use icp::LeastSquares;
 pub use kdtree::{KdTree, LastNearest};
 pub use level::{LEVEL_TOLERANCE_RAD, LevelLocaliser};
 pub use lorentz::{
-    COARSE, CROWD_RATIO, DENSE_SIGMAS, EARLY_CONVERGENCE, FIRST_PASS_ENOUGH,
-    FIRST_PASS_SURFACE_POINTS, FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS,
+    COARSE, CROWD_RATIO, DENSE_SIGMAS, EARLY_CONVERGENCE, FIRST_PASS_CONVERGENCE,
+    FIRST_PASS_ENOUGH, FIRST_PASS_SURFACE_POINTS, FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS,
     LINE_RESIDUALS_SPREAD, Lorentz, POLISH_MORE, THESIS_SIGMAS, WIDE_SIGMAS,
 };
 pub use map::{MapBuilder, MapConfig, MatchStats, Placed};
@@ -47,4 +47,4 @@ pub use matcher::{
 pub use mbicp::Mbicp;
 pub use plicp::PointToLine;
 pub use quality::{MatchQuality, TrustRule, polish};
-pub use scan::{RangeScan, SPARSE_BEAM_STEP_RAD, ScanPoints, beam_step};
+pub use scan::{RangeScan, SPARSE_BEAM_STEP_RAD, ScanPoints, beam_step, beam_step_below};

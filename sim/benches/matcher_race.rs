@@ -1,0 +1,54 @@
+//! `lorentz-lines` against `pl-icp`, the reference, on the pairs of `twin matchers`
+//! (seed 1, 300 a row), timed pair by pair in turn: each pair is matched by one and then the
+//! other, the order swapped from pair to pair and from round to round, and each matcher's time
+//! on a pair is its best of the rounds. A busy moment of the host then slows both alike, where
+//! `twin matchers`, which runs one matcher over a whole row and then the next, can hand it to
+//! one of them. Prints each row's median time a pair for both and their ratio. Each match
+//! prepares its reference, as in `twin matchers`.
+//!
+//! `cargo bench --bench matcher_race` (`RACE_ROUNDS`, default 5, sets the rounds)
+
+use robot::localization::{MatcherKind, Reference};
+use sim::commands::matchers;
+use std::path::Path;
+use std::time::Instant;
+
+fn main() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let sets = matchers::standard_sets(&root, 300, 1).expect("the bundled worlds and logs load");
+    let rounds: usize = std::env::var("RACE_ROUNDS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(5);
+    let racers = [MatcherKind::LorentzLines, MatcherKind::PointToLine].map(|k| k.build());
+    println!("| row | lorentz-lines | pl-icp | ratio |\n|---|---|---|---|");
+    for set in &sets {
+        let mut best = vec![[f64::INFINITY; 2]; set.cases.len()];
+        for round in 0..rounds {
+            for (pair, case) in set.cases.iter().enumerate() {
+                for turn in 0..2 {
+                    let k = (turn + round + pair) % 2;
+                    let clock = Instant::now();
+                    let reference = Reference::new(case.reference.points());
+                    let answer = racers[k].align(&reference, &case.current.points(), case.guess);
+                    std::hint::black_box(answer);
+                    let micros = clock.elapsed().as_secs_f64() * 1e6;
+                    best[pair][k] = best[pair][k].min(micros);
+                }
+            }
+        }
+        let median = |k: usize| {
+            let mut times: Vec<f64> = best.iter().map(|b| b[k]).collect();
+            times.sort_by(f64::total_cmp);
+            times[times.len() / 2]
+        };
+        let (ll, pl) = (median(0), median(1));
+        println!(
+            "| {} | {:.0} µs | {:.0} µs | {:.3} |",
+            set.name,
+            ll,
+            pl,
+            ll / pl
+        );
+    }
+}
