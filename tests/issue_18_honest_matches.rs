@@ -1016,8 +1016,10 @@ fn as_right_in_fewer_searches(
 /// never settles: it ran to its cap of 30 searches and stopped on one of the two. With
 /// `stop_on_cycles` it stops as soon as a search brings the estimate back to where it was two
 /// searches before. Over one held-out seed (25, 150 pairs a row): every row right as often (a
-/// pair either way allowed), each taking fewer searches in all, and nearly every answer within
-/// a millimetre and a hundredth of a degree of the one the uncapped cycle gave.
+/// pair either way allowed), each taking no more searches and the rows together fewer, and
+/// nearly every answer within a millimetre and a hundredth of a degree of the one the uncapped
+/// cycle gave. (The synthetic pairs without outliers stopped cycling on this seed once a dense
+/// first pass stopped at `FIRST_PASS_CONVERGENCE`: their searches are the same both ways.)
 #[test]
 fn a_pass_that_alternates_stops() {
     use robot::localization::Lorentz;
@@ -1027,6 +1029,7 @@ fn a_pass_that_alternates_stops() {
         stop_on_cycles: false,
         ..Lorentz::with_lines()
     };
+    let mut all = [0, 0];
     for set in sets(150, 25) {
         let (mut right, mut searches, mut near) = ([0, 0], [0, 0], 0);
         for c in &set.cases {
@@ -1044,12 +1047,16 @@ fn a_pass_that_alternates_stops() {
         let name = &set.name;
         println!("{name}: right {right:?}, searches {searches:?}, near {near}");
         assert!(right[1] + 1 >= right[0], "{name}: right {right:?}");
-        assert!(searches[1] < searches[0], "{name}: searches {searches:?}");
+        assert!(searches[1] <= searches[0], "{name}: searches {searches:?}");
         assert!(
             100 * near >= 98 * set.cases.len(),
             "{name}: {near} answers near"
         );
+        for k in 0..2 {
+            all[k] += searches[k];
+        }
     }
+    assert!(all[1] < all[0], "searches in all {all:?}");
 }
 
 /// In the first σ pass of a dense scan, a pair that no reference line holds (a corner, a short

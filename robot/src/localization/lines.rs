@@ -113,20 +113,23 @@ impl Moments {
     /// thesis takes it: what [`Moments::fit_quick`] is tested against.
     #[cfg(test)]
     fn fit(&self) -> Fit {
-        let (centroid, covariance, small) = self.moments();
+        let (centroid, covariance, small, _) = self.moments();
         ([centroid[0], centroid[1]], direction(covariance), small)
     }
 
     /// The fit of the thesis (E.20–E.30) with the direction by square roots instead of an
-    /// arctangent, a sine and a cosine (the angle's fit, kept for the tests): the same line to the last bit or two. Those three functions, nine times a
-    /// reference point, were half the instructions of [`lines_of`], itself a tenth of a
-    /// `lorentz-lines` match. The line kept is this fit too since 2026-11-28: refitting it by
-    /// the angle at the end took 3 % of a synthetic match (`perf`), and its answers moved by
-    /// less than the tests' margins (README, *Cheaper first passes and lines*).
+    /// arctangent, a sine and a cosine (the angle's fit, kept for the tests): the same line to
+    /// the last bit or two. Those three functions, nine times a reference point, were half the
+    /// instructions of [`lines_of`], itself a tenth of a `lorentz-lines` match. The line kept
+    /// is this fit too since 2026-11-28: refitting it by the angle at the end took 3 % of a
+    /// synthetic match (`perf`), and its answers moved by less than the tests' margins
+    /// (README, *Cheaper first passes and lines*).
     fn fit_quick(&self) -> Fit {
-        let (centroid, [cxx, cxy, cyy], small) = self.moments();
+        let (centroid, [cxx, cxy, cyy], small, root) = self.moments();
         let (a, b) = (cxx - cyy, 2.0 * cxy);
-        let r = (a * a + b * b).sqrt();
+        // √(a² + b²) is the eigenvalues' spread `moments` took: (2 cxy)² and 4 cxy · cxy
+        // round alike, as scaling by 2 is exact.
+        let r = root;
         let quick = if r > 0.0 && r.is_finite() {
             // The half angle of (a, b): cos² = (1 + a/r) / 2, sin² = (1 − a/r) / 2, each taken
             // from the larger, so neither loses its digits; the cosine stays ≥ 0 as the
@@ -144,15 +147,19 @@ impl Moments {
         (centroid, quick, small)
     }
 
-    /// Centroid, covariance `[cxx, cxy, cyy]` and its smaller eigenvalue.
-    fn moments(&self) -> ([f64; 2], [f64; 3], f64) {
-        let (mx, my) = (self.sx / self.n, self.sy / self.n);
-        let cxx = self.sxx / self.n - mx * mx;
-        let cxy = self.sxy / self.n - mx * my;
-        let cyy = self.syy / self.n - my * my;
+    /// Centroid, covariance `[cxx, cxy, cyy]`, its smaller eigenvalue and the spread of its
+    /// two eigenvalues (`√((cxx − cyy)² + 4 cxy²)`).
+    fn moments(&self) -> ([f64; 2], [f64; 3], f64, f64) {
+        // One division and five products instead of five divisions: the growth waits on the
+        // divider (README, *Cheaper first passes and lines*).
+        let inv = 1.0 / self.n;
+        let (mx, my) = (self.sx * inv, self.sy * inv);
+        let cxx = self.sxx * inv - mx * mx;
+        let cxy = self.sxy * inv - mx * my;
+        let cyy = self.syy * inv - my * my;
         let root = ((cxx - cyy) * (cxx - cyy) + 4.0 * cxy * cxy).sqrt();
         let small = (0.5 * (cxx + cyy - root)).max(0.0);
-        ([mx, my], [cxx, cxy, cyy], small)
+        ([mx, my], [cxx, cxy, cyy], small, root)
     }
 }
 
