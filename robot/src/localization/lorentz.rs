@@ -509,11 +509,8 @@ impl Lorentz {
         let (mut g, mut h) = ([0.0; 3], [[0.0; 3]; 3]);
         for (p, q) in src.iter().zip(dst) {
             // Rotated point; x' = rx + tx, ∂x'/∂θ = −ry, ∂²x'/∂θ² = −rx; ∂y'/∂θ = rx, ∂²y'/∂θ² = −ry.
-            let rx = c * p[0] - s * p[1];
-            let ry = s * p[0] + c * p[1];
-            let ex = rx + phi[1] - q[0];
-            let ey = ry + phi[2] - q[1];
-            add_product_pair((&mut g, &mut h), [rx, ry], [ex, ey], two_s2);
+            let (r, e) = moved(p, q, (s, c), phi);
+            add_product_pair((&mut g, &mut h), r, e, two_s2);
         }
         h[1][0] = h[0][1];
         h[2][0] = h[0][2];
