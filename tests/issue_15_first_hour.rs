@@ -314,3 +314,63 @@ fn twin_pairs_makes_what_twin_match_reads() {
     let shipped = std::fs::read(repo().join("tests/data/pairs.jsonl")).unwrap();
     assert!(shipped.iter().filter(|&&b| b == b'\n').count() >= 3);
 }
+
+/// `twin pairs` reads a recorded log too: each scan with the next, the guess the laser's motion
+/// by the log's odometry. Checked against the MIT log's first `FLASER` lines read here on their
+/// own (in this file `x y theta` are the odometry, and no laser offset is declared).
+#[test]
+fn twin_pairs_reads_a_log() {
+    let log = repo().join("tests/data/mit-csail.clf");
+    let o = twin(&["pairs", log.to_str().unwrap(), "--max", "3"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let pairs: Vec<serde_json::Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("a JSON pair"))
+        .collect();
+    assert_eq!(pairs.len(), 3, "{text}");
+    let lines = std::fs::read_to_string(&log).unwrap();
+    let flaser: Vec<(Vec<f64>, [f64; 3])> = lines
+        .lines()
+        .filter(|l| l.starts_with("FLASER "))
+        .take(4)
+        .map(|l| {
+            let f: Vec<f64> = l
+                .split_whitespace()
+                .skip(1)
+                .filter_map(|w| w.parse().ok())
+                .collect();
+            let n = f[0] as usize;
+            (f[1..=n].to_vec(), [f[n + 1], f[n + 2], f[n + 3]])
+        })
+        .collect();
+    for (k, pair) in pairs.iter().enumerate() {
+        let ([ax, ay, at], [bx, by, bt]) = (flaser[k].1, flaser[k + 1].1);
+        let (dx, dy) = (bx - ax, by - ay);
+        let want = [
+            at.cos() * dx + at.sin() * dy,
+            -at.sin() * dx + at.cos() * dy,
+            (bt - at + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
+                - std::f64::consts::PI,
+        ];
+        let guess: Vec<f64> = pair["guess"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        for i in 0..3 {
+            assert!(
+                (guess[i] - want[i]).abs() < 1e-9,
+                "pair {k}: guess {guess:?}, want {want:?}"
+            );
+        }
+        let ranges = pair["cur"]["ranges"].as_array().unwrap();
+        assert_eq!(ranges.len(), flaser[k + 1].0.len(), "pair {k}");
+        assert_eq!(ranges[100].as_f64(), Some(flaser[k + 1].0[100]), "pair {k}");
+    }
+    // A file that is neither a run's folder nor a log is named in the error.
+    let o = twin(&["pairs", "no-such-log.clf"]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no-such-log.clf"));
+}

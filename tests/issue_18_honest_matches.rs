@@ -1159,3 +1159,60 @@ fn a_dense_first_pass_stops_sooner() {
         }
     }
 }
+
+/// The MIT log has no ground truth, but now and then its odometry lags a scan: the robot drives a
+/// steady 0.2–0.26 m a scan down a corridor and one pair's odometry says 8–13 cm less. Every such
+/// pair of the log (the odometry of its eight neighbours within 3 cm of their median, its own
+/// more than 8 cm from it) is answered with the steady motion, and trusted: a corridor leaves the
+/// answer free along it only as far as its doors and ends allow, and `lorentz-lines` follows the
+/// scans there rather than the guess.
+#[test]
+fn an_odometry_glitch_does_not_hold_the_answer() {
+    let log =
+        robot::logs::read_log(&repo().join("tests/data/mit-csail.clf")).expect("the MIT log reads");
+    // Each scan with the odometry recorded just before it (a FLASER line's own pose).
+    let mut scans = Vec::new();
+    let mut odometry = None;
+    for event in &log.events {
+        match event {
+            robot::logs::LogEvent::Odometry { pose, .. } => odometry = Some(*pose),
+            robot::logs::LogEvent::Scan(scan) => {
+                scans.push((scan.clone(), odometry.expect("odometry before every scan")));
+            }
+            robot::logs::LogEvent::Points { .. } => {}
+        }
+    }
+    let guesses: Vec<Pose2> = scans.windows(2).map(|w| w[0].1.relative(&w[1].1)).collect();
+    let matcher = MatcherKind::LorentzLines.build();
+    let mut glitches = 0;
+    for k in 4..guesses.len() - 4 {
+        let mut around: Vec<f64> = (k - 4..=k + 4)
+            .filter(|&j| j != k)
+            .map(|j| guesses[j].x)
+            .collect();
+        around.sort_by(f64::total_cmp);
+        let steady = 0.5 * (around[3] + around[4]);
+        let calm = around.iter().all(|x| (x - steady).abs() < 0.03);
+        if !calm || (guesses[k].x - steady).abs() <= 0.08 {
+            continue;
+        }
+        glitches += 1;
+        let reference = Reference::new(scans[k].0.points());
+        let result = matcher.align(&reference, &scans[k + 1].0.points(), guesses[k]);
+        println!(
+            "pair {k}: odometry {:.3} m, its neighbours {steady:.3} m, answer {:.3} m",
+            guesses[k].x, result.pose.x
+        );
+        assert!(result.converged, "pair {k}: not trusted: {result:?}");
+        assert!(
+            (result.pose.x - steady).abs() < 0.03,
+            "pair {k}: the answer {:.3} m stays near the odometry {:.3} m, not the steady {steady:.3} m",
+            result.pose.x,
+            guesses[k].x
+        );
+    }
+    assert!(
+        glitches >= 5,
+        "the log's odometry glitches {glitches} times"
+    );
+}

@@ -430,13 +430,15 @@ struct PairLine<'a> {
     guess: [f64; 3],
 }
 
-/// `twin pairs`: the scan pairs of a finished run as `twin match` reads them — each level scan
-/// of RUN_DIR/scans.jsonl with the next, the guess from odometry (the current laser pose in the
-/// reference laser's frame).
+/// `twin pairs`: scan pairs as `twin match` reads them — each level scan with the next, the guess
+/// from odometry (the current laser pose in the reference laser's frame). From a finished run's
+/// RUN_DIR/scans.jsonl, or from a recorded log (`twin map`'s formats: CARMEN, 002's `.script` and
+/// RobotLogger `.log`, MCAP), whose odometry is interpolated to each scan's stamp as the map
+/// builder does and composed with the log's laser offset.
 #[derive(Clone, Debug, clap::Args)]
 pub struct PairsArgs {
-    /// A run's output folder (`twin run` or `twin drive`), with its scans.jsonl.
-    pub run_dir: PathBuf,
+    /// A run's output folder (`twin run` or `twin drive`), with its scans.jsonl, or a log file.
+    pub source: PathBuf,
     /// Write at most this many pairs.
     #[arg(long)]
     pub max: Option<usize>,
@@ -445,32 +447,95 @@ pub struct PairsArgs {
 /// Runs `twin pairs`, writing JSON Lines to stdout.
 pub fn pairs_main(args: PairsArgs) -> Result<(), super::CommandError> {
     use super::CommandError;
-    use std::io::{BufRead, Write};
-    let path = args.run_dir.join("scans.jsonl");
-    let file = std::fs::File::open(&path).map_err(|source| CommandError::Read {
-        path: path.clone(),
+    use std::io::Write;
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    let mut pairs = Pairs {
+        out: &mut out,
+        previous: None,
+        written: 0,
+        max: args.max.unwrap_or(usize::MAX),
+    };
+    if args.source.is_dir() {
+        pairs_of_run(&args.source.join("scans.jsonl"), &mut pairs)?;
+    } else {
+        pairs_of_log(&args.source, &mut pairs)?;
+    }
+    out.flush().map_err(|source| CommandError::Io {
+        what: "writing stdout",
+        source,
+    })
+}
+
+/// Writes each scan given with the one before it, as `twin match`'s input lines.
+struct Pairs<'a, W: std::io::Write> {
+    out: &'a mut W,
+    /// The scan before, and its laser's pose in the odometry frame.
+    previous: Option<(RangeScan, Pose2)>,
+    written: usize,
+    max: usize,
+}
+
+impl<W: std::io::Write> Pairs<'_, W> {
+    /// Whether `--max` pairs have been written.
+    fn full(&self) -> bool {
+        self.written >= self.max
+    }
+
+    /// Pairs `scan`, taken with the laser at `laser`, with the scan before (if any); `None`
+    /// breaks the chain (a tilted scan, a scan without odometry).
+    fn push(&mut self, next: Option<(RangeScan, Pose2)>) -> Result<(), super::CommandError> {
+        if let (Some((reference, at)), Some((current, laser))) = (&self.previous, &next) {
+            let g = at.relative(laser);
+            let pair = PairLine {
+                reference,
+                cur: current,
+                guess: [g.x, g.y, g.theta],
+            };
+            let text = serde_json::to_string(&pair).map_err(|e| super::CommandError::Io {
+                what: "writing stdout",
+                source: e.into(),
+            })?;
+            writeln!(self.out, "{text}").map_err(|source| super::CommandError::Io {
+                what: "writing stdout",
+                source,
+            })?;
+            self.written += 1;
+        }
+        self.previous = next;
+        Ok(())
+    }
+}
+
+/// The pairs of a run's scans.jsonl.
+fn pairs_of_run(
+    path: &Path,
+    pairs: &mut Pairs<'_, impl std::io::Write>,
+) -> Result<(), super::CommandError> {
+    use super::CommandError;
+    use std::io::BufRead;
+    let file = std::fs::File::open(path).map_err(|source| CommandError::Read {
+        path: path.to_path_buf(),
         source,
     })?;
-    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
-    let io = |what| move |source| CommandError::Io { what, source };
-    let mut previous: Option<(RangeScan, Pose2)> = None;
-    let mut written = 0usize;
     for (k, line) in std::io::BufReader::new(file).lines().enumerate() {
-        if args.max.is_some_and(|m| written >= m) {
+        if pairs.full() {
             break;
         }
-        let line = line.map_err(io("reading scans.jsonl"))?;
+        let line = line.map_err(|source| CommandError::Io {
+            what: "reading scans.jsonl",
+            source,
+        })?;
         if line.trim().is_empty() {
             continue;
         }
         let scan: RunScan = serde_json::from_str(&line).map_err(|e| CommandError::Parse {
-            path: path.clone(),
+            path: path.to_path_buf(),
             line: k + 1,
             message: e.to_string(),
         })?;
         // Tilted scans do not lie in the plane of the next: leave them out.
         if scan.laser_tilt.abs() > 1e-9 {
-            previous = None;
+            pairs.push(None)?;
             continue;
         }
         let [x, y, theta] = scan.odometry;
@@ -483,23 +548,32 @@ pub fn pairs_main(args: PairsArgs) -> Result<(), super::CommandError> {
             range_max: scan.range_max,
             ranges: scan.ranges,
         };
-        if let Some((reference, at)) = &previous {
-            let g = at.relative(&laser);
-            let pair = PairLine {
-                reference,
-                cur: &range,
-                guess: [g.x, g.y, g.theta],
-            };
-            let text = serde_json::to_string(&pair).map_err(|e| CommandError::Parse {
-                path: path.clone(),
-                line: k + 1,
-                message: e.to_string(),
-            })?;
-            writeln!(out, "{text}").map_err(io("writing stdout"))?;
-            written += 1;
-        }
-        previous = Some((range, laser));
+        pairs.push(Some((range, laser)))?;
     }
-    out.flush().map_err(io("writing stdout"))?;
+    Ok(())
+}
+
+/// The pairs of a recorded log's range scans: the odometry interpolated to each scan's stamp
+/// (a scan outside the odometry's span breaks the chain), composed with the log's laser offset.
+fn pairs_of_log(
+    path: &Path,
+    pairs: &mut Pairs<'_, impl std::io::Write>,
+) -> Result<(), super::CommandError> {
+    let log = robot::logs::read_log(path)?;
+    let mut odometry = robot::odometry::PoseHistory::unbounded();
+    for event in &log.events {
+        if let LogEvent::Odometry { stamp, pose } = event {
+            odometry.push(*stamp, *pose);
+        }
+    }
+    for event in &log.events {
+        if pairs.full() {
+            break;
+        }
+        if let LogEvent::Scan(scan) = event {
+            let laser = odometry.at(scan.stamp).map(|pose| pose.compose(&log.mount));
+            pairs.push(laser.map(|laser| (scan.clone(), laser)))?;
+        }
+    }
     Ok(())
 }
