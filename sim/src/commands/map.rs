@@ -481,8 +481,9 @@ impl<W: std::io::Write> Pairs<'_, W> {
         self.written >= self.max
     }
 
-    /// Pairs `scan`, taken with the laser at `laser`, with the scan before (if any); `None`
-    /// breaks the chain (a tilted scan, a scan without odometry).
+    /// Pairs `next` (a scan and the laser's pose when it was taken) with the scan before, if
+    /// any, and keeps it for the one after; `None` breaks the chain (a tilted scan, a scan
+    /// without odometry).
     fn push(&mut self, next: Option<(RangeScan, Pose2)>) -> Result<(), super::CommandError> {
         if let (Some((reference, at)), Some((current, laser))) = (&self.previous, &next) {
             let g = at.relative(laser);
