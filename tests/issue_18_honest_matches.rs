@@ -1171,17 +1171,8 @@ fn an_odometry_glitch_does_not_hold_the_answer() {
     let log =
         robot::logs::read_log(&repo().join("tests/data/mit-csail.clf")).expect("the MIT log reads");
     // Each scan with the odometry recorded just before it (a FLASER line's own pose).
-    let mut scans = Vec::new();
-    let mut odometry = None;
-    for event in &log.events {
-        match event {
-            robot::logs::LogEvent::Odometry { pose, .. } => odometry = Some(*pose),
-            robot::logs::LogEvent::Scan(scan) => {
-                scans.push((scan.clone(), odometry.expect("odometry before every scan")));
-            }
-            robot::logs::LogEvent::Points { .. } => {}
-        }
-    }
+    let scans = log.scans_with_last_pose();
+    assert_eq!(scans.len(), log.scans(), "odometry before every scan");
     let guesses: Vec<Pose2> = scans.windows(2).map(|w| w[0].1.relative(&w[1].1)).collect();
     let matcher = MatcherKind::LorentzLines.build();
     let mut glitches = 0;

@@ -119,6 +119,26 @@ impl RecordedLog {
     pub fn skipped_lines(&self) -> usize {
         self.skipped.values().sum()
     }
+
+    /// Each range scan with the odometry pose recorded last before it (in a CARMEN log, the
+    /// `FLASER` line's own pose, which a corrected log gives as the corrected one); scans
+    /// before any odometry are left out.
+    pub fn scans_with_last_pose(&self) -> Vec<(RangeScan, Pose2)> {
+        let mut pose = None;
+        let mut scans = Vec::new();
+        for event in &self.events {
+            match event {
+                LogEvent::Odometry { pose: p, .. } => pose = Some(*p),
+                LogEvent::Scan(scan) => {
+                    if let Some(p) = pose {
+                        scans.push((scan.clone(), p));
+                    }
+                }
+                LogEvent::Points { .. } => {}
+            }
+        }
+        scans
+    }
 }
 
 /// Why a log cannot be read.

@@ -32,7 +32,6 @@ use rand::RngExt;
 use rand_distr::{Distribution, StandardNormal};
 use robot::Pose2;
 use robot::localization::{MatchResult, MatcherKind, RangeScan, Reference, TrustRule};
-use robot::logs::LogEvent;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -141,21 +140,8 @@ pub fn log_set(
     error: GuessError,
     seed: u64,
 ) -> Result<CaseSet, CommandError> {
-    let recorded = robot::logs::read_log(log)?;
-    // Each FLASER's pose is recorded just before its scan.
-    let mut scans: Vec<(RangeScan, Pose2)> = Vec::new();
-    let mut pose = None;
-    for event in recorded.events {
-        match event {
-            LogEvent::Odometry { pose: p, .. } => pose = Some(p),
-            LogEvent::Scan(scan) => {
-                if let Some(p) = pose {
-                    scans.push((scan, p));
-                }
-            }
-            LogEvent::Points { .. } => {}
-        }
-    }
+    // Each FLASER's pose (the corrected one) is recorded just before its scan.
+    let scans = robot::logs::read_log(log)?.scans_with_last_pose();
     let stream = rng::stream_seed(seed, &format!("matchers/{name}"));
     let cases = scans
         .windows(2)
