@@ -486,9 +486,10 @@ fn dense_scans_narrow_their_sigma_throughout() {
 /// the row's 10 cm (seeds 6 and 8) end within it: six over seeds 1–12, and none the other way,
 /// since Edmonton's readings beyond its declared 10 m are read and its sparse scans asked a
 /// smaller share (seed 2's pairs 200 and 245, which this test held before, are found without
-/// it now). Over four other
-/// seeds of 300 pairs it is right more often on the large guesses, and Edmonton's sparse scans,
-/// whose corridors offer look-alike places within the window, lose no pair.
+/// it now). Those two pairs are compared without the sparse finish, which also rescues seed
+/// 6's. Over four other seeds of 300 pairs it is right more often on the large guesses, and
+/// Edmonton's sparse scans, whose corridors offer look-alike places within the window, lose no
+/// pair.
 #[test]
 fn a_coarse_search_finds_what_the_restarts_miss() {
     use robot::localization::{COARSE, Lorentz};
@@ -504,6 +505,12 @@ fn a_coarse_search_finds_what_the_restarts_miss() {
             .expect("the large guesses' row")
             .clone()
     };
+    // The two pairs without the sparse finish (`SPARSE_FINISH`), which rescues seed 6's pair on
+    // its own: the coarse search alone is compared.
+    let [unfinished_without, unfinished_with] = [&without, &with].map(|m| Lorentz {
+        sparse_finish: None,
+        ..m.clone()
+    });
     for (seed, pair) in [(6, 261), (8, 181)] {
         let set = large(&sets(300, seed));
         let one = CaseSet {
@@ -511,7 +518,10 @@ fn a_coarse_search_finds_what_the_restarts_miss() {
             ..set
         };
         assert_eq!(
-            (right_answers(&one, &without), right_answers(&one, &with)),
+            (
+                right_answers(&one, &unfinished_without),
+                right_answers(&one, &unfinished_with)
+            ),
             (0, 1),
             "seed {seed} pair {pair}"
         );
@@ -595,16 +605,18 @@ fn the_scans_dispute_a_corrected_pose_where_it_is_wrong() {
 }
 
 /// Edmonton's corrected poses are off by about a decimetre on some pairs too, where the scans
-/// do not dispute them twice over: on pairs 153 and 288 `lorentz-lines` and `pl-icp`, started
-/// from the same guess, land within 2 cm and 0.2° of each other, 10–12 cm from the log's pose,
-/// and both fit 5 points in 100 more of the current points than it (0.44 and 0.43 against
-/// 0.36; 0.36 and 0.37 against 0.26). Both are agreed on every seed of 1–20. Such failures are counted as agreed (and stay failures);
-/// on synthetic pairs, whose truth is exact, none is.
+/// do not dispute them twice over: on pair 288 `lorentz-lines` and `pl-icp`, started from the
+/// same guess, land within 2 cm and 0.2° of each other, 12–13 cm from the log's pose, and both
+/// fit 10 points in 100 more of the current points than it (0.38 and 0.37 against 0.26), on
+/// every seed of 1–20. Such failures are counted as agreed (and stay failures); on synthetic
+/// pairs, whose truth is exact, none is. (Pair 153, which this test held too, is no longer
+/// one: finished by point-to-line ICP (`SPARSE_FINISH`), `lorentz-lines` lands on `pl-icp`'s
+/// answer there, 8.5 cm from the log's pose, inside the row's 10 cm.)
 #[test]
 fn two_matchers_agree_against_a_corrected_pose_where_it_is_off() {
     let kinds = [MatcherKind::LorentzLines, MatcherKind::PointToLine];
     for seed in [1, 7] {
-        for (pairs, pair) in [(151..156, 153), (286..291, 288)] {
+        for (pairs, pair) in [(286..291, 288)] {
             let start = pairs.start;
             let set = log_pairs("edmonton", pairs, seed);
             let mut outcomes = Vec::new();
@@ -1206,4 +1218,64 @@ fn an_odometry_glitch_does_not_hold_the_answer() {
         glitches >= 5,
         "the log's odometry glitches {glitches} times"
     );
+}
+
+/// On sparse 1° scans the line-assisted Lorentzian finishes its answer with point-to-line ICP
+/// (`SPARSE_FINISH`), and its answers depend less on the guess. Over seeds held out from the
+/// twenty it was chosen on (21–24: the same 150 pairs of Edmonton's, each seed with guesses of
+/// its own), fewer pairs have an answer more than a centimetre from the median of their four,
+/// and no fewer are right; the dense scans do not run it, with the same answers to the last bit.
+#[test]
+fn a_point_to_line_finish_steadies_sparse_answers() {
+    use robot::localization::Lorentz;
+    let without = Lorentz {
+        sparse_finish: None,
+        ..Lorentz::with_lines()
+    };
+    let with = Lorentz::with_lines();
+    assert!(with.sparse_finish.is_some());
+    let matchers = [&without, &with];
+    // Each Edmonton pair's answers from every seed, without and with.
+    let mut answers: BTreeMap<usize, [Vec<Pose2>; 2]> = BTreeMap::new();
+    let mut right = [0usize; 2];
+    for seed in [21, 22, 23, 24] {
+        for set in sets(150, seed) {
+            if set.name.contains("edmonton") {
+                for (k, c) in set.cases.iter().enumerate() {
+                    for (m, matcher) in matchers.iter().enumerate() {
+                        let r = matcher.match_scans(&c.reference, &c.current, c.guess);
+                        right[m] += usize::from(is_right(&set, c, &r));
+                        answers.entry(k).or_default()[m].push(r.pose);
+                    }
+                }
+            } else if seed == 21 && !set.name.starts_with("real, guess") {
+                for c in set.cases.iter().take(50) {
+                    let [a, b] = matchers.map(|m| m.match_scans(&c.reference, &c.current, c.guess));
+                    assert_eq!(a, b, "{}: dense scans are not finished", set.name);
+                }
+            }
+        }
+    }
+    assert_eq!(answers.len(), 150, "Edmonton's pairs");
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        0.5 * (v[(v.len() - 1) / 2] + v[v.len() / 2])
+    };
+    let mut unsteady = [0usize; 2];
+    for poses in answers.values() {
+        for (m, poses) in poses.iter().enumerate() {
+            let mx = median(&mut poses.iter().map(|p| p.x).collect());
+            let my = median(&mut poses.iter().map(|p| p.y).collect());
+            let far = poses.iter().any(|p| (p.x - mx).hypot(p.y - my) > 0.01);
+            unsteady[m] += usize::from(far);
+        }
+    }
+    println!("unsteady pairs {unsteady:?}, right answers {right:?} (without, with the finish)");
+    assert!(
+        unsteady[1] < unsteady[0],
+        "answers over a centimetre from their median: {} finished against {}",
+        unsteady[1],
+        unsteady[0]
+    );
+    assert!(right[1] >= right[0], "right answers: {right:?}");
 }

@@ -13,6 +13,7 @@
 //! a centimetre, the loop starts again from the answer moved by ±1 cm in x, in y and ±1.5° in
 //! θ, and the answer with the least total distance is kept, as CSM's `restart` does.
 
+use super::kdtree::LastNearest;
 use super::matcher::{Convergence, MatchResult, Reference, ScanMatcher, solve3, transform_all};
 use super::quality::accumulate;
 use super::scan::ScanPoints;
@@ -36,22 +37,32 @@ pub struct PointToLine {
     /// Start again around the answer when its mean distance to the lines is above this, metres;
     /// `None` never does. Default 0.01.
     pub restart_above_m: Option<f64>,
+    /// Gauss–Newton steps towards the minimum of each iteration's pairs. Default 10, which
+    /// reaches it (CSM solves it in closed form); the next pairing moves the estimate again
+    /// anyway, so one step a round settles at the same place in more, cheaper rounds.
+    pub gauss_newton_steps: u32,
+}
+
+impl PointToLine {
+    /// CSM's defaults ([`PointToLine::default`]), as a constant for other matchers' settings.
+    pub const CSM: PointToLine = PointToLine {
+        max_correspondence_m: 2.0,
+        max_share: 0.95,
+        adaptive_order: 0.7,
+        adaptive_mult: 2.0,
+        convergence: Convergence {
+            translation_m: 1e-4,
+            rotation_rad: 1e-4,
+            max_iterations: 100,
+        },
+        restart_above_m: Some(0.01),
+        gauss_newton_steps: 10,
+    };
 }
 
 impl Default for PointToLine {
     fn default() -> Self {
-        PointToLine {
-            max_correspondence_m: 2.0,
-            max_share: 0.95,
-            adaptive_order: 0.7,
-            adaptive_mult: 2.0,
-            convergence: Convergence {
-                translation_m: 1e-4,
-                rotation_rad: 1e-4,
-                max_iterations: 100,
-            },
-            restart_above_m: Some(0.01),
-        }
+        PointToLine::CSM
     }
 }
 
@@ -134,11 +145,39 @@ impl ScanMatcher for PointToLine {
 }
 
 impl PointToLine {
+    /// The loop from `start` (no restarts), searching near each current point's last nearest
+    /// reference point in `last`, which it keeps up to date: another matcher's finish, on the
+    /// cache of its own searches. The answer and the iterations it took.
+    pub(super) fn refine(
+        &self,
+        reference: &Reference,
+        current: &ScanPoints,
+        start: Pose2,
+        last: &mut [Option<LastNearest>],
+    ) -> (Pose2, u32) {
+        let found = self.run_with(reference, current, start, last);
+        let pose = found.pose;
+        (
+            Pose2::new(pose.x, pose.y, wrap_angle(pose.theta)),
+            found.iterations,
+        )
+    }
+
     /// The loop from `start`: pair, trim, minimise, until the step is tiny.
     fn run(&self, reference: &Reference, current: &ScanPoints, start: Pose2) -> Loop {
+        self.run_with(reference, current, start, &mut vec![None; current.len()])
+    }
+
+    /// [`run`](Self::run), its nearest-point searches starting from `last`.
+    fn run_with(
+        &self,
+        reference: &Reference,
+        current: &ScanPoints,
+        start: Pose2,
+        last: &mut [Option<LastNearest>],
+    ) -> Loop {
         let mut pose = start;
         let mut moved = Vec::with_capacity(current.len());
-        let mut last = vec![None; current.len()];
         let mut candidates: Vec<Candidate> = Vec::with_capacity(current.len());
         let mut distances = Vec::with_capacity(current.len());
         let mut nearest_to = vec![f64::INFINITY; reference.points.len()];
@@ -224,7 +263,7 @@ impl PointToLine {
                 found.error += c.segment;
             }
             found.kept = pairs.len();
-            let Some(next) = minimise(&pairs, pose) else {
+            let Some(next) = minimise(&pairs, pose, self.gauss_newton_steps) else {
                 break;
             };
             let step = Pose2::new(next.x - pose.x, next.y - pose.y, next.theta - pose.theta);
@@ -239,11 +278,11 @@ impl PointToLine {
     }
 }
 
-/// The pose minimising the pairs' squared distances to their lines, by Gauss–Newton from `from`;
-/// `None` when the pairs leave a direction free (a corridor).
-fn minimise(pairs: &[Pair], from: Pose2) -> Option<Pose2> {
+/// The pose minimising the pairs' squared distances to their lines, by at most `steps`
+/// Gauss–Newton steps from `from`; `None` when the pairs leave a direction free (a corridor).
+fn minimise(pairs: &[Pair], from: Pose2, steps: u32) -> Option<Pose2> {
     let mut pose = from;
-    for _ in 0..10 {
+    for _ in 0..steps {
         let (s, c) = pose.theta.sin_cos();
         let (mut h, mut g) = ([[0.0f64; 3]; 3], [0.0f64; 3]);
         for pair in pairs {
