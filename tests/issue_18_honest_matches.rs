@@ -1225,32 +1225,51 @@ fn an_odometry_glitch_does_not_hold_the_answer() {
 /// twenty it was chosen on (21–24: the same 150 pairs of Edmonton's, each seed with guesses of
 /// its own), fewer pairs have an answer more than a centimetre from the median of their four,
 /// and no fewer are right; the dense scans do not run it, with the same answers to the last bit.
+/// The finish stops when its pairings come round in a cycle (`stop_on_cycles`): the same right
+/// answers for under half the finish's iterations (without, a quarter of the finishes ran to
+/// the cap of 100).
 #[test]
 fn a_point_to_line_finish_steadies_sparse_answers() {
-    use robot::localization::Lorentz;
+    use robot::localization::{Lorentz, PointToLine, SPARSE_FINISH};
     let without = Lorentz {
         sparse_finish: None,
         ..Lorentz::with_lines()
     };
     let with = Lorentz::with_lines();
-    assert!(with.sparse_finish.is_some());
-    let matchers = [&without, &with];
+    assert_eq!(with.sparse_finish, Some(SPARSE_FINISH));
+    let cycling = Lorentz {
+        sparse_finish: Some(PointToLine {
+            stop_on_cycles: None,
+            ..SPARSE_FINISH
+        }),
+        ..Lorentz::with_lines()
+    };
+    let matchers = [&without, &with, &cycling];
     // Each Edmonton pair's answers from every seed, without and with.
     let mut answers: BTreeMap<usize, [Vec<Pose2>; 2]> = BTreeMap::new();
-    let mut right = [0usize; 2];
+    let mut right = [0usize; 3];
+    // The finish's iterations, summed: with and without stopping on cycles.
+    let mut finishing = [0u64; 2];
     for seed in [21, 22, 23, 24] {
         for set in sets(150, seed) {
             if set.name.contains("edmonton") {
                 for (k, c) in set.cases.iter().enumerate() {
-                    for (m, matcher) in matchers.iter().enumerate() {
-                        let r = matcher.match_scans(&c.reference, &c.current, c.guess);
-                        right[m] += usize::from(is_right(&set, c, &r));
-                        answers.entry(k).or_default()[m].push(r.pose);
+                    let results =
+                        matchers.map(|m| m.match_scans(&c.reference, &c.current, c.guess));
+                    for (m, r) in results.iter().enumerate() {
+                        right[m] += usize::from(is_right(&set, c, r));
                     }
+                    let [unfinished, finished, cycled] = &results;
+                    let entry = answers.entry(k).or_default();
+                    entry[0].push(unfinished.pose);
+                    entry[1].push(finished.pose);
+                    finishing[0] += u64::from(finished.iterations - unfinished.iterations);
+                    finishing[1] += u64::from(cycled.iterations - unfinished.iterations);
                 }
             } else if seed == 21 && !set.name.starts_with("real, guess") {
                 for c in set.cases.iter().take(50) {
-                    let [a, b] = matchers.map(|m| m.match_scans(&c.reference, &c.current, c.guess));
+                    let [a, b] =
+                        [&without, &with].map(|m| m.match_scans(&c.reference, &c.current, c.guess));
                     assert_eq!(a, b, "{}: dense scans are not finished", set.name);
                 }
             }
@@ -1270,7 +1289,10 @@ fn a_point_to_line_finish_steadies_sparse_answers() {
             unsteady[m] += usize::from(far);
         }
     }
-    println!("unsteady pairs {unsteady:?}, right answers {right:?} (without, with the finish)");
+    println!(
+        "unsteady pairs {unsteady:?}, right answers {right:?} (without, with the finish, \
+         without its cycle stop), the finish's iterations {finishing:?}"
+    );
     assert!(
         unsteady[1] < unsteady[0],
         "answers over a centimetre from their median: {} finished against {}",
@@ -1278,4 +1300,9 @@ fn a_point_to_line_finish_steadies_sparse_answers() {
         unsteady[0]
     );
     assert!(right[1] >= right[0], "right answers: {right:?}");
+    assert_eq!(right[1], right[2], "the cycle stop changed right answers");
+    assert!(
+        2 * finishing[0] < finishing[1],
+        "the finish's iterations: {finishing:?}"
+    );
 }

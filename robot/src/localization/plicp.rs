@@ -18,6 +18,7 @@ use super::matcher::{Convergence, MatchResult, Reference, ScanMatcher, solve3, t
 use super::quality::accumulate;
 use super::scan::ScanPoints;
 use crate::geometry::{Pose2, wrap_angle};
+use std::collections::VecDeque;
 
 /// Point-to-line ICP.
 #[derive(Copy, Clone, Debug, PartialEq)]
@@ -41,6 +42,11 @@ pub struct PointToLine {
     /// reaches it (CSM solves it in closed form); the next pairing moves the estimate again
     /// anyway, so one step a round settles at the same place in more, cheaper rounds.
     pub gauss_newton_steps: u32,
+    /// End the loop when an iteration brings the estimate back to within `convergence` of
+    /// where it was up to this many iterations before: the pairings repeat in a cycle and the
+    /// estimate with them, so no later iteration would settle it. Not in CSM; `None` (the
+    /// default) runs such a loop to `max_iterations`.
+    pub stop_on_cycles: Option<usize>,
 }
 
 impl PointToLine {
@@ -57,6 +63,7 @@ impl PointToLine {
         },
         restart_above_m: Some(0.01),
         gauss_newton_steps: 10,
+        stop_on_cycles: None,
     };
 }
 
@@ -177,6 +184,10 @@ impl PointToLine {
         last: &mut [Option<LastNearest>],
     ) -> Loop {
         let mut pose = start;
+        // The estimates before `pose` that a cycle would come back to (`stop_on_cycles`; the
+        // step's own test catches a return to `pose`).
+        let kept = self.stop_on_cycles.map_or(0, |n| n.saturating_sub(1));
+        let mut earlier = VecDeque::with_capacity(kept);
         let mut moved = Vec::with_capacity(current.len());
         let mut candidates: Vec<Candidate> = Vec::with_capacity(current.len());
         let mut distances = Vec::with_capacity(current.len());
@@ -267,10 +278,24 @@ impl PointToLine {
                 break;
             };
             let step = Pose2::new(next.x - pose.x, next.y - pose.y, next.theta - pose.theta);
+            let back_to = |p: &Pose2| {
+                let d = Pose2::new(next.x - p.x, next.y - p.y, next.theta - p.theta);
+                self.convergence.reached(&d)
+            };
+            let cycled = earlier.iter().any(back_to);
+            if kept > 0 {
+                if earlier.len() == kept {
+                    earlier.pop_front();
+                }
+                earlier.push_back(pose);
+            }
             pose = next;
             found.pose = pose;
             if self.convergence.reached(&step) {
                 found.settled = true;
+                break;
+            }
+            if cycled {
                 break;
             }
         }
