@@ -170,11 +170,10 @@ pub struct Lorentz {
     /// in the thesis; `None` (the default) stops it as the other passes before the last, and
     /// [`Lorentz::with_lines`] has [`FIRST_PASS_CONVERGENCE`].
     pub first_pass_convergence: Option<Convergence>,
-    /// For sparse scans (not dense, as `dense_sigmas_m`), with line-assisted association: when
-    /// the match has its answer, this point-to-line ICP ([`PointToLine`]) runs from it, without
-    /// restarts and on the match's nearest-point cache, and its answer replaces the match's when
-    /// the trust rule trusts it and it fits no fewer than [`SPARSE_FINISH_MARGIN`] of the
-    /// current points less. Not in the thesis; `None` (the default) keeps the match's answer,
+    /// For sparse scans (not dense, as `dense_sigmas_m`): when the match has its answer, this
+    /// point-to-line ICP ([`PointToLine`]) runs from it on the match's nearest-point cache, and
+    /// its answer replaces the match's when the trust rule trusts it and it fits no fewer than
+    /// [`SPARSE_FINISH_MARGIN`] of the current points less. Not in the thesis; `None` (the default) keeps the match's answer,
     /// and [`Lorentz::with_lines`] has [`SPARSE_FINISH`].
     pub sparse_finish: Option<PointToLine>,
 }
@@ -922,9 +921,10 @@ impl ScanMatcher for Lorentz {
     ) -> MatchResult {
         // Each current point's last nearest reference point, for every search of the match.
         let mut last = vec![None; current.len()];
-        let matched = self.match_from(reference, current, guess, &mut last);
+        let dense = self.is_dense(current);
+        let matched = self.match_from((reference, current), dense, guess, &mut last);
         match self.sparse_finish {
-            Some(finish) if self.lines.is_some() && !self.is_dense(current) => {
+            Some(finish) if !dense => {
                 self.finish(&finish, (reference, current), matched, &mut last)
             }
             _ => matched,
@@ -934,16 +934,15 @@ impl ScanMatcher for Lorentz {
 
 impl Lorentz {
     /// The match from `guess`: the σ passes, and when their answer is loose or untrusted the
-    /// wide schedule, the restarts and the coarse search's starts; `last` as in
-    /// [`Lorentz::passes`].
+    /// wide schedule, the restarts and the coarse search's starts; `dense` as
+    /// [`Lorentz::is_dense`] says of `current`, `last` as in [`Lorentz::passes`].
     fn match_from(
         &self,
-        reference: &Reference,
-        current: &ScanPoints,
+        (reference, current): (&Reference, &ScanPoints),
+        dense: bool,
         guess: Pose2,
         last: &mut [Option<LastNearest>],
     ) -> MatchResult {
-        let dense = self.is_dense(current);
         let spread = self.line_residuals_spread.filter(|_| dense);
         let first_spread = self.first_spread.filter(|_| spread.is_some());
         let mut lines = self.lines.as_ref().map(|params| Assist {
