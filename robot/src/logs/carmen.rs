@@ -16,7 +16,12 @@
 //! between 10 and 50 m, walls and pillars on which its scans and its corrected poses agree. So
 //! the readings beyond the declared range are kept when the log's no-return value can be told
 //! apart ([`no_return_from`]), and only when it cannot does the declared range end the scans
-//! (as MRPT's CARMEN reader always does). An `FLASER` spans 180° from −90°.
+//! (as MRPT's CARMEN reader always does).
+//!
+//! An `FLASER` states neither its first bearing nor its beam step: like CARMEN's own reader it
+//! starts at −90° and takes the step from the SICK mode its count of readings betrays
+//! ([`flaser_increment`]). A SICK sweeping 180° gives 181 or 361 readings (1° or 0.5° apart);
+//! loggers that drop the last one write 180 or 360, whose beams are still 1° or 0.5° apart.
 
 use super::{Cursor, LogError, LogEvent, LogFormat, RecordedLog};
 use crate::geometry::Pose2;
@@ -27,6 +32,21 @@ use std::f64::consts::{FRAC_PI_2, PI};
 
 /// An FLASER reading at or beyond this is a no-return, metres.
 pub const FLASER_RANGE_MAX_M: f64 = 81.9;
+
+/// The bearing step of an `FLASER` of `n` readings, radians: CARMEN's
+/// `carmen_laser_guess_angle_increment`. 180 or 181 readings are 1° apart, 360 or 361 are 0.5°,
+/// 400 or 401 are 0.25°; any other count spreads over 180°. Spreading 180 readings over 180°
+/// instead would stretch every bearing by 1/179: half a degree at the scan's ends, 9 cm sideways
+/// on a wall 10 m away.
+pub(crate) fn flaser_increment(n: usize) -> f64 {
+    match n {
+        180 | 181 => PI / 180.0,
+        360 | 361 => PI / 360.0,
+        400 | 401 => PI / 720.0,
+        0 | 1 => 0.0,
+        _ => PI / (n - 1) as f64,
+    }
+}
 
 pub(super) fn parse(text: &str, file: &str) -> Result<RecordedLog, LogError> {
     let mut log = RecordedLog::new(LogFormat::Carmen);
@@ -55,7 +75,7 @@ pub(super) fn parse(text: &str, file: &str) -> Result<RecordedLog, LogError> {
                     log.skip(&format!("{kind} with a negative stamp"));
                     continue;
                 };
-                let increment = if n > 1 { PI / (n - 1) as f64 } else { 0.0 };
+                let increment = flaser_increment(n);
                 readings += n;
                 if front_max < FLASER_RANGE_MAX_M {
                     for &r in ranges.iter().filter(|&&r| r >= front_max && r.is_finite()) {
