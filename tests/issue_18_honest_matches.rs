@@ -216,7 +216,7 @@ fn the_corrected_logs_fit_their_poses_best_at_carmens_beam_step() {
     for (log, beams, step_deg) in [("edmonton", 180, 1.0), ("freiburg-101", 360, 0.5)] {
         let scans = robot::logs::read_log(&dir.join(format!("{log}-corrected.log.gz")))
             .unwrap()
-            .scans_with_last_pose();
+            .scans_with_logged_pose();
         for (scan, _) in &scans {
             assert_eq!(scan.ranges.len(), beams, "{log}");
             assert!((scan.angle_increment - f64::to_radians(step_deg)).abs() < 1e-12);
@@ -1232,8 +1232,8 @@ fn a_dense_first_pass_stops_sooner() {
 fn an_odometry_glitch_does_not_hold_the_answer() {
     let log =
         robot::logs::read_log(&repo().join("tests/data/mit-csail.clf")).expect("the MIT log reads");
-    // Each scan with the odometry recorded just before it (a FLASER line's own pose).
-    let scans = log.scans_with_last_pose();
+    // Each scan with the pose its FLASER line states, in this log the odometry.
+    let scans = log.scans_with_logged_pose();
     assert_eq!(scans.len(), log.scans(), "odometry before every scan");
     let guesses: Vec<Pose2> = scans.windows(2).map(|w| w[0].1.relative(&w[1].1)).collect();
     let matcher = MatcherKind::LorentzLines.build();

@@ -19,9 +19,16 @@
 //! (as MRPT's CARMEN reader always does).
 //!
 //! An `FLASER` states neither its first bearing nor its beam step: like CARMEN's own reader it
-//! starts at −90° and takes the step from the SICK mode its count of readings betrays
-//! ([`flaser_increment`]). A SICK sweeping 180° gives 181 or 361 readings (1° or 0.5° apart);
-//! loggers that drop the last one write 180 or 360, whose beams are still 1° or 0.5° apart.
+//! takes the step from the SICK mode its count of readings betrays ([`flaser_increment`]) and
+//! starts at −90° ([`flaser_start`]). A SICK sweeping 180° gives 181 or 361 readings (1° or
+//! 0.5° apart); loggers that drop the last one write 180 or 360, whose beams are still 1° or
+//! 0.5° apart.
+//!
+//! An `FLASER`'s `x y theta` is the laser's pose as the logger knew it, its `odom_*` fields the
+//! base's odometry. They are equal in a raw log; a SLAM-corrected log states its corrected pose
+//! in `x y theta` (and may keep the raw odometry in the others). The odometry becomes the log's
+//! odometry samples, and the stated pose is kept beside each scan
+//! ([`RecordedLog::line_poses`](super::RecordedLog::line_poses)).
 
 use super::{Cursor, LogError, LogEvent, LogFormat, RecordedLog};
 use crate::geometry::Pose2;
@@ -38,13 +45,23 @@ pub const FLASER_RANGE_MAX_M: f64 = 81.9;
 /// 400 or 401 are 0.25°; any other count spreads over 180°. Spreading 180 readings over 180°
 /// instead would stretch every bearing by 1/179: half a degree at the scan's ends, 9 cm sideways
 /// on a wall 10 m away.
-pub(crate) fn flaser_increment(n: usize) -> f64 {
+fn flaser_increment(n: usize) -> f64 {
     match n {
         180 | 181 => PI / 180.0,
         360 | 361 => PI / 360.0,
         400 | 401 => PI / 720.0,
         0 | 1 => 0.0,
         _ => PI / (n - 1) as f64,
+    }
+}
+
+/// The bearing of an `FLASER`'s first reading, radians: −90°, as CARMEN's reader takes it, but
+/// for the SICK's 100° sweeps (400 or 401 readings 0.25° apart), which span −50° to +50° ahead
+/// of the laser. (CARMEN's reader starts those at −90° too, which turns them 40° to the right.)
+fn flaser_start(n: usize) -> f64 {
+    match n {
+        400 | 401 => -50f64.to_radians(),
+        _ => -FRAC_PI_2,
     }
 }
 
@@ -69,7 +86,7 @@ pub(super) fn parse(text: &str, file: &str) -> Result<RecordedLog, LogError> {
             "FLASER" => {
                 let n = count(&at, fields.next(), "number of readings")?;
                 let ranges = numbers(&at, &mut fields, n, "range")?;
-                let _laser = pose(&at, &mut fields, "x y theta")?;
+                let stated = pose(&at, &mut fields, "x y theta")?;
                 let odom = pose(&at, &mut fields, "odom_x odom_y odom_theta")?;
                 let Some(stamp) = stamp(&at, fields.next())? else {
                     log.skip(&format!("{kind} with a negative stamp"));
@@ -85,8 +102,9 @@ pub(super) fn parse(text: &str, file: &str) -> Result<RecordedLog, LogError> {
                 }
                 log.events.push(LogEvent::Odometry { stamp, pose: odom });
                 log.events.push(LogEvent::Scan(
-                    RangeScan::new(-FRAC_PI_2, increment, front_max, ranges).stamped(stamp),
+                    RangeScan::new(flaser_start(n), increment, front_max, ranges).stamped(stamp),
                 ));
+                log.line_poses.insert(log.events.len() - 1, stated);
             }
             "ROBOTLASER1" => {
                 let _type = at.number(fields.next(), "laser_type")?;
@@ -131,6 +149,7 @@ pub(super) fn parse(text: &str, file: &str) -> Result<RecordedLog, LogError> {
                 log.events.push(LogEvent::Scan(
                     RangeScan::new(start, resolution, max_range, ranges).stamped(stamp),
                 ));
+                log.line_poses.insert(log.events.len() - 1, laser);
             }
             "ODOM" => {
                 let odom = pose(&at, &mut fields, "x y theta")?;
@@ -244,6 +263,62 @@ mod tests {
         assert!((scan.angle_min + FRAC_PI_2).abs() < 1e-12);
         assert!((scan.angle_increment - FRAC_PI_2).abs() < 1e-12);
         assert_eq!(scan.stamp, Stamp::from_secs_f64(1000.5));
+    }
+
+    /// The first bearing and the step of an `FLASER` of `n` readings, in degrees.
+    fn geometry(n: usize) -> (f64, f64) {
+        let ranges = vec!["1.0"; n].join(" ");
+        let log = parse(
+            &format!("FLASER {n} {ranges} 0 0 0 0 0 0 1.5 host 0\n"),
+            "t.clf",
+        )
+        .unwrap();
+        let LogEvent::Scan(scan) = &log.events[1] else {
+            panic!("{:?}", log.events)
+        };
+        (
+            scan.angle_min.to_degrees(),
+            scan.angle_increment.to_degrees(),
+        )
+    }
+
+    #[test]
+    fn an_flaser_takes_its_beam_step_from_its_count_of_readings() {
+        let near =
+            |(a, b): (f64, f64), (c, d): (f64, f64)| (a - c).abs() < 1e-9 && (b - d).abs() < 1e-9;
+        // A SICK's 180° sweeps, with and without the last reading.
+        for (n, step) in [(181, 1.0), (180, 1.0), (361, 0.5), (360, 0.5)] {
+            assert!(near(geometry(n), (-90.0, step)), "{n}: {:?}", geometry(n));
+        }
+        // Its 100° sweeps, ahead of the laser.
+        assert!(near(geometry(401), (-50.0, 0.25)), "{:?}", geometry(401));
+        assert!(near(geometry(400), (-50.0, 0.25)), "{:?}", geometry(400));
+        // Any other count spans 180°.
+        assert!(near(geometry(91), (-90.0, 2.0)), "{:?}", geometry(91));
+        assert!(near(geometry(1), (-90.0, 0.0)), "{:?}", geometry(1));
+    }
+
+    #[test]
+    fn a_corrected_pose_is_kept_beside_the_raw_odometry() {
+        // x y theta (corrected) differ from odom_x odom_y odom_theta (raw).
+        let text = "FLASER 2 1.0 2.0 5.0 6.0 0.5 1.0 2.0 0.1 1.5 host 0\n\
+                    FLASER 2 1.0 2.0 5.5 6.0 0.5 1.4 2.0 0.1 2.5 host 0\n\
+                    ODOM 1.6 2.0 0.1 0 0 0 3.0 host 0\n";
+        let log = parse(text, "t.clf").unwrap();
+        let odometry: Vec<Pose2> = log
+            .events
+            .iter()
+            .filter_map(|e| match e {
+                LogEvent::Odometry { pose, .. } => Some(*pose),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(odometry[0], Pose2::new(1.0, 2.0, 0.1), "the raw odometry");
+        let stated: Vec<Pose2> = log.scans_with_logged_pose().iter().map(|s| s.1).collect();
+        assert_eq!(
+            stated,
+            [Pose2::new(5.0, 6.0, 0.5), Pose2::new(5.5, 6.0, 0.5)]
+        );
     }
 
     /// The scans of a log that declares `max` as its usable range, one scan a line of 10

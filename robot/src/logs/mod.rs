@@ -86,6 +86,10 @@ pub struct RecordedLog {
     pub events: Vec<LogEvent>,
     /// Lines skipped, by their first word.
     pub skipped: BTreeMap<String, usize>,
+    /// The pose a scan's own line states, by the scan's index in `events`: a CARMEN `FLASER`'s
+    /// `x y theta` and a `ROBOTLASER1`'s laser pose (in a SLAM-corrected log, the corrected
+    /// pose, where the odometry fields may keep the raw odometry). Other formats state none.
+    pub line_poses: BTreeMap<usize, Pose2>,
 }
 
 impl RecordedLog {
@@ -95,6 +99,7 @@ impl RecordedLog {
             mount: Pose2::IDENTITY,
             events: Vec::new(),
             skipped: BTreeMap::new(),
+            line_poses: BTreeMap::new(),
         }
     }
 
@@ -120,17 +125,17 @@ impl RecordedLog {
         self.skipped.values().sum()
     }
 
-    /// Each range scan with the odometry pose recorded last before it (in a CARMEN log, the
-    /// `FLASER` line's own pose, which a corrected log gives as the corrected one); scans
-    /// before any odometry are left out.
-    pub fn scans_with_last_pose(&self) -> Vec<(RangeScan, Pose2)> {
+    /// Each range scan with the pose its own line states ([`RecordedLog::line_poses`]: in a
+    /// corrected CARMEN log, the corrected pose), or else the odometry pose recorded last before
+    /// it; scans with neither are left out.
+    pub fn scans_with_logged_pose(&self) -> Vec<(RangeScan, Pose2)> {
         let mut pose = None;
         let mut scans = Vec::new();
-        for event in &self.events {
+        for (k, event) in self.events.iter().enumerate() {
             match event {
                 LogEvent::Odometry { pose: p, .. } => pose = Some(*p),
                 LogEvent::Scan(scan) => {
-                    if let Some(p) = pose {
+                    if let Some(p) = self.line_poses.get(&k).copied().or(pose) {
                         scans.push((scan.clone(), p));
                     }
                 }

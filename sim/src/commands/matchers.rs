@@ -140,8 +140,8 @@ pub fn log_set(
     error: GuessError,
     seed: u64,
 ) -> Result<CaseSet, CommandError> {
-    // Each FLASER's pose (the corrected one) is recorded just before its scan.
-    let scans = robot::logs::read_log(log)?.scans_with_last_pose();
+    // Each scan with the pose its own FLASER line states: a corrected log's corrected pose.
+    let scans = robot::logs::read_log(log)?.scans_with_logged_pose();
     let stream = rng::stream_seed(seed, &format!("matchers/{name}"));
     let cases = scans
         .windows(2)
