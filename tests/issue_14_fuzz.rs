@@ -265,9 +265,10 @@ proptest! {
         let _ = line.parse::<robot::control::Step>();
         if let Ok((telegram, _)) = sick::Telegram::decode(&bytes)
             && let Ok(values) = sick::MeasuredValues::from_telegram(&telegram)
+            && let Ok(scan) = values.to_scan(robot::Stamp::ZERO, 32_000)
         {
-            let scan = values.to_scan(robot::Stamp::ZERO, 32_000);
-            prop_assert!(scan.ranges_mm.len() <= 1_000);
+            prop_assert!(scan.ranges_mm.len() <= 401);
+            prop_assert!(scan.angle_increment > 0.0);
         }
     }
 }
@@ -632,6 +633,41 @@ fn twin_serve_prints_its_statistics_when_terminated() {
     let status = child.wait().unwrap();
     assert!(status.success(), "{status:?}: {rest}");
     assert!(rest.contains("base: 0 connection(s)"), "{rest}");
+}
+
+/// Class 4, the edge of `twin serve`: a robot whose laser no LMS variant matches is refused
+/// before anything is served (the host would read its scans' field from their count), named
+/// with what it has.
+#[test]
+fn twin_serve_refuses_a_laser_the_lms_telegrams_cannot_carry() {
+    let dir = scratch("serve-laser");
+    let robot = absolute("scenarios/robots/pioneer-3dx.toml")
+        .replace("beams = 361", "beams = 100")
+        .replace("fov_deg = 180.0", "fov_deg = 90.0");
+    assert!(robot.contains("beams = 100") && robot.contains("fov_deg = 90.0"));
+    std::fs::write(dir.join("robot.toml"), robot).unwrap();
+    let scenario = absolute("scenarios/lab-tour.toml").replace(
+        &format!(
+            "\"{}/robots/pioneer-3dx.toml\"",
+            repo().join("scenarios").display()
+        ),
+        &format!("\"{}\"", dir.join("robot.toml").display()),
+    );
+    // A valid laser would be served until terminated: the scenario must name the new robot.
+    assert!(scenario.contains("robot.toml"), "{scenario}");
+    let path = dir.join("s.toml");
+    std::fs::write(&path, scenario).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_twin"))
+        .args(["serve", path.to_str().unwrap(), "--base", "tcp:127.0.0.1:0"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("an LMS") && stderr.contains("100 beams over 90°"),
+        "{stderr}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Class 6: a `[[check]]` error names the line of the key that is wrong, not the table's.

@@ -480,6 +480,31 @@ pub enum ValuesError {
     /// Unit bits the listing leaves reserved.
     #[error("measured values with reserved unit bits {0:#04b}")]
     Unit(u8),
+    /// A count of values that no variant of the LMS sends ([`lms_field`]).
+    #[error(
+        "measured values carry {0} values; an LMS sends 181 or 361 (180° at 1° or 0.5°) or 101, 201 or 401 (100° at 1°, 0.5° or 0.25°)"
+    )]
+    Field(usize),
+}
+
+/// The LMS's variants (`3B`, [`Telegram::set_variant`]) by the number of values a scan carries:
+/// the count, the first beam's bearing and the step, degrees. The LMS sweeps from its right:
+/// 180° from −90°, 100° (centred ahead) from −50°.
+const LMS_FIELDS: [(usize, f64, f64); 5] = [
+    (181, -90.0, 1.0),
+    (361, -90.0, 0.5),
+    (101, -50.0, 1.0),
+    (201, -50.0, 0.5),
+    (401, -50.0, 0.25),
+];
+
+/// The first beam's bearing and the step, radians, of a scan of `count` values as the LMS sends
+/// it; `None` when no variant sends that many.
+pub fn lms_field(count: usize) -> Option<(f64, f64)> {
+    LMS_FIELDS
+        .iter()
+        .find(|(n, _, _)| *n == count)
+        .map(|(_, first, step)| (first.to_radians(), step.to_radians()))
 }
 
 /// The values of one scan as the LMS sends them in the 32 m measuring mode.
@@ -547,9 +572,12 @@ impl MeasuredValues {
         Telegram::reply(MEASURED_VALUES, data, status)
     }
 
-    /// The scan in the thesis's geometry (−90° to +90°), ranges in millimetres; a value at or
-    /// above `range_max_mm` is no return.
-    pub fn to_scan(&self, stamp: Stamp, range_max_mm: u16) -> LaserScan {
+    /// The scan in REP-103 bearings, ranges in millimetres; a value at or above `range_max_mm`
+    /// is no return. The count of values gives the variant's field ([`lms_field`]): 181 or 361
+    /// values span 180° from −90° (the thesis's variant), 101, 201 or 401 span 100° from −50°.
+    pub fn to_scan(&self, stamp: Stamp, range_max_mm: u16) -> Result<LaserScan, ValuesError> {
+        let count = self.ranges.len();
+        let (angle_min, angle_increment) = lms_field(count).ok_or(ValuesError::Field(count))?;
         let scale = match self.unit {
             RangeUnit::Centimetres => 10,
             RangeUnit::Millimetres => 1,
@@ -559,15 +587,14 @@ impl MeasuredValues {
             .iter()
             .map(|&r| r.saturating_mul(scale).min(range_max_mm))
             .collect();
-        let n = self.ranges.len().max(2);
-        LaserScan {
+        Ok(LaserScan {
             stamp,
-            angle_min: -std::f64::consts::FRAC_PI_2,
-            angle_increment: std::f64::consts::PI / (n - 1) as f64,
+            angle_min,
+            angle_increment,
             range_max_mm,
             ranges_mm,
             head: None,
-        }
+        })
     }
 }
 
@@ -672,7 +699,7 @@ mod tests {
         assert_eq!(v.unit, RangeUnit::Millimetres);
         assert_eq!(v.ranges, ranges);
         assert_eq!(v.status, 0x10);
-        let scan = v.to_scan(Stamp::ZERO, 32_000);
+        let scan = v.to_scan(Stamp::ZERO, 32_000).unwrap();
         assert_eq!(scan.len(), 361);
         assert_eq!(scan.range_m(7), None, "at or past 32 m is no return");
         assert_eq!(scan.range_m(0), Some(0.5));
@@ -687,7 +714,53 @@ mod tests {
         let v = MeasuredValues::from_telegram(&t).unwrap();
         assert_eq!(v.ranges, vec![300, 400]);
         assert_eq!(v.flags, vec![false, true]);
-        assert_eq!(v.to_scan(Stamp::ZERO, 8_000).ranges_mm, vec![3_000, 4_000]);
+        // Two values are no variant's scan: named, not spread over a field.
+        let refused = v.to_scan(Stamp::ZERO, 8_000).unwrap_err();
+        assert_eq!(refused, ValuesError::Field(2));
+        assert!(refused.to_string().contains("carry 2 values"), "{refused}");
+        // The same values in a 100° scan at 1°, in centimetres: scaled to millimetres.
+        let mut ranges = vec![300u16; 101];
+        ranges[1] = 400;
+        let mut t = MeasuredValues::telegram_mm(&ranges, 0);
+        t.data[1] &= 0x3f;
+        let scan = MeasuredValues::from_telegram(&t)
+            .unwrap()
+            .to_scan(Stamp::ZERO, 8_000)
+            .unwrap();
+        assert_eq!(scan.ranges_mm[..2], [3_000, 4_000]);
+    }
+
+    #[test]
+    fn each_variant_spans_its_own_field() {
+        // (values, first and last bearing in degrees): 180° from the right, 100° centred.
+        for (count, first, last) in [
+            (181, -90.0, 90.0),
+            (361, -90.0, 90.0),
+            (101, -50.0, 50.0),
+            (201, -50.0, 50.0),
+            (401, -50.0, 50.0),
+        ] {
+            let t = MeasuredValues::telegram_mm(&vec![1_000; count], 0);
+            let scan = MeasuredValues::from_telegram(&t)
+                .unwrap()
+                .to_scan(Stamp::ZERO, 32_000)
+                .unwrap();
+            let degrees = |i: usize| scan.angle(i).to_degrees();
+            assert!((degrees(0) - first).abs() < 1e-9, "{count}: {}", degrees(0));
+            assert!(
+                (degrees(count - 1) - last).abs() < 1e-9,
+                "{count}: {}",
+                degrees(count - 1)
+            );
+        }
+        for count in [0, 1, 180, 360, 400, 402] {
+            let t = MeasuredValues::telegram_mm(&vec![1_000; count], 0);
+            let values = MeasuredValues::from_telegram(&t).unwrap();
+            assert_eq!(
+                values.to_scan(Stamp::ZERO, 32_000),
+                Err(ValuesError::Field(count))
+            );
+        }
     }
 
     #[test]

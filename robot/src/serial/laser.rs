@@ -195,8 +195,10 @@ fn read_loop(mut port: Box<dyn Port>, shared: &Shared, timing: &LaserTiming, clo
         while let Some(frame) = decoder.next_frame() {
             match frame {
                 Frame::Telegram(t) if t.command == MEASURED_VALUES => {
-                    match MeasuredValues::from_telegram(&t) {
-                        Ok(values) => {
+                    let scan = MeasuredValues::from_telegram(&t)
+                        .and_then(|values| values.to_scan(Stamp::ZERO, timing.range_max_mm));
+                    match scan {
+                        Ok(mut scan) => {
                             let bytes = 8 + t.data.len(); // STX, address, length, command, status, CRC
                             let on_line = serial_time(bytes, timing.baud) + sweep;
                             let stamp = Stamp(now.0.saturating_sub(on_line.as_nanos() as u64));
@@ -204,9 +206,8 @@ fn read_loop(mut port: Box<dyn Port>, shared: &Shared, timing: &LaserTiming, clo
                                 state.scans.pop_front();
                                 state.dropped_scans += 1;
                             }
-                            state
-                                .scans
-                                .push_back(values.to_scan(stamp, timing.range_max_mm));
+                            scan.stamp = stamp;
+                            state.scans.push_back(scan);
                         }
                         Err(e) => state.notes.push(format!("unreadable measured values: {e}")),
                     }

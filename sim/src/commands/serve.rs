@@ -1027,6 +1027,19 @@ pub fn main(args: ServeArgs) -> Result<(), super::CommandError> {
         None => None,
     };
     let scenario = crate::config::Scenario::load(&args.scenario)?;
+    // The host reads a scan's field from its count of values, as an LMS sends it.
+    let laser = &scenario.robot.laser;
+    let spans =
+        robot::protocol::sick::lms_field(usize::from(laser.beams)).is_some_and(|(_, step)| {
+            (step * f64::from(laser.beams - 1) - laser.fov_deg.get().to_radians()).abs() < 1e-9
+        });
+    if !spans {
+        return Err(CommandError::option(
+            "the scenario",
+            "must give its robot an LMS to serve (181 or 361 beams over 180°, 101, 201 or 401 over 100°)",
+            format!("{} beams over {}°", laser.beams, laser.fov_deg.get()),
+        ));
+    }
     let twin = Twin::new(
         &scenario.world,
         &scenario.robot,
