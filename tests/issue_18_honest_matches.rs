@@ -309,6 +309,98 @@ fn twin_matchers_prints_the_table() {
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--pairs"));
 }
 
+/// `twin matchers --log PATH` adds two rows from a corrected log of one's own (here the first
+/// 40 scans of Belgioioso's, unzipped and renamed): its pairs from small and large guesses,
+/// judged against the log's stated poses, while the standard rows stay as they were to the bit.
+/// A log cut inside a line is refused with the file and line named.
+#[test]
+fn a_corrected_log_of_ones_own_adds_two_rows() {
+    use std::io::Read;
+    let out = tempfile_dir("twin-matchers-log");
+    std::fs::create_dir_all(&out).unwrap();
+    let bundled = repo().join("tests/data/corrected/belgioioso-corrected.log.gz");
+    let mut text = String::new();
+    flate2::read::GzDecoder::new(std::fs::File::open(&bundled).unwrap())
+        .read_to_string(&mut text)
+        .unwrap();
+    let mut kept = Vec::new();
+    let mut scans = 0;
+    for line in text.lines() {
+        scans += usize::from(line.starts_with("FLASER "));
+        if scans > 40 {
+            break;
+        }
+        kept.push(line);
+    }
+    let log = out.join("castle-corrected.clf");
+    std::fs::write(&log, kept.join("\n") + "\n").unwrap();
+
+    // The rows' truth is the log's: the same relative poses as the bundled log's first pairs.
+    let [small, large] = matchers::extra_log_sets(&log, 100, 3).unwrap();
+    assert_eq!(small.name, "real, castle");
+    assert_eq!(large.name, "real, castle, guess σ 20 cm / 10°");
+    assert_eq!((small.cases.len(), large.cases.len()), (39, 39));
+    let exact = matchers::GuessError {
+        sigma_m: 0.0,
+        sigma_rad: 0.0,
+    };
+    let standard = matchers::log_set("x", &bundled, 39, exact, 3).unwrap();
+    for (own, bundled) in small.cases.iter().zip(&standard.cases) {
+        assert_eq!(own.truth, bundled.truth);
+    }
+
+    let run = |args: &[&str], dir: &std::path::Path| {
+        let run = Command::new(env!("CARGO_BIN_EXE_twin"))
+            .args([
+                "matchers",
+                "--pairs",
+                "6",
+                "--quiet",
+                "--matchers",
+                "lorentz-lines",
+            ])
+            .args(args)
+            .arg("--out")
+            .arg(dir)
+            .current_dir(repo())
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr).into_owned();
+        (
+            run.status.success(),
+            String::from_utf8(run.stdout).unwrap(),
+            stderr,
+        )
+    };
+    let (ok, table, stderr) = run(&["--log", log.to_str().unwrap()], &out.join("with"));
+    assert!(ok, "{stderr}");
+    assert!(
+        table.contains("| real, castle (6) | lorentz-lines |"),
+        "{table}"
+    );
+    assert!(
+        table.contains("| real, castle, guess σ 20 cm / 10° (6) | lorentz-lines |"),
+        "{table}"
+    );
+    let (ok, _, stderr) = run(&[], &out.join("without"));
+    assert!(ok, "{stderr}");
+    let csv = |dir: &str| std::fs::read_to_string(out.join(dir).join("pairs.csv")).unwrap();
+    let (with, without) = (csv("with"), csv("without"));
+    assert!(with.starts_with(&without), "the standard rows changed");
+    assert_eq!(with.lines().count(), without.lines().count() + 12);
+
+    let cut = out.join("cut.log");
+    let whole = kept.join("\n");
+    std::fs::write(&cut, &whole[..whole.len() - 300]).unwrap();
+    let (ok, _, stderr) = run(&["--log", cut.to_str().unwrap()], &out.join("cut"));
+    assert!(!ok);
+    assert!(
+        stderr.contains("cut.log:") && stderr.contains("line ends early"),
+        "{stderr}"
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}
+
 fn tempfile_dir(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);

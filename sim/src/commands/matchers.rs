@@ -464,14 +464,7 @@ pub fn standard_sets(root: &Path, n: usize, seed: u64) -> Result<Vec<CaseSet>, C
         )?,
     ];
     let robot = RobotDescription::load(root.join("scenarios/robots/pioneer-3dx.toml"))?;
-    let small = GuessError {
-        sigma_m: 0.05,
-        sigma_rad: 2f64.to_radians(),
-    };
-    let large = GuessError {
-        sigma_m: 0.20,
-        sigma_rad: 10f64.to_radians(),
-    };
+    let (small, large) = (SMALL_GUESS, LARGE_GUESS);
     let logs = ["belgioioso", "freiburg-101", "edmonton"];
     let log = |name: &str| -> PathBuf {
         root.join(format!("tests/data/corrected/{name}-corrected.log.gz"))
@@ -509,6 +502,50 @@ pub fn standard_sets(root: &Path, n: usize, seed: u64) -> Result<Vec<CaseSet>, C
     Ok(sets)
 }
 
+/// The two rows of a corrected log given with `--log`: its consecutive pairs from guesses σ 5 cm
+/// / 2° off (`real, NAME`) and σ 20 cm / 10° off (`real, NAME, guess σ 20 cm / 10°`), `n` pairs
+/// each; NAME is the file's name without `.gz`, `.log` or `.clf` and `-corrected`.
+pub fn extra_log_sets(path: &Path, n: usize, seed: u64) -> Result<[CaseSet; 2], CommandError> {
+    let file = path
+        .file_name()
+        .map(|f| f.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let stem = file.strip_suffix(".gz").unwrap_or(&file);
+    let stem = [".log", ".clf"]
+        .iter()
+        .find_map(|ext| stem.strip_suffix(ext))
+        .unwrap_or(stem);
+    let name = stem.strip_suffix("-corrected").unwrap_or(stem);
+    let small = log_set(&format!("real, {name}"), path, n, SMALL_GUESS, seed)?;
+    if small.cases.is_empty() {
+        return Err(CommandError::option(
+            "--log",
+            "must hold at least two scans with poses",
+            path.display(),
+        ));
+    }
+    let large = log_set(
+        &format!("real, {name}, guess σ 20 cm / 10°"),
+        path,
+        n,
+        LARGE_GUESS,
+        seed,
+    )?;
+    Ok([small, large])
+}
+
+/// The guesses of the synthetic rows and of the logs' own rows: σ 5 cm and 2° off the truth.
+const SMALL_GUESS: GuessError = GuessError {
+    sigma_m: 0.05,
+    sigma_rad: 2f64.to_radians(),
+};
+
+/// The guesses of the large-guess rows: σ 20 cm and 10° off the truth.
+const LARGE_GUESS: GuessError = GuessError {
+    sigma_m: 0.20,
+    sigma_rad: 10f64.to_radians(),
+};
+
 /// Arguments of `twin matchers`.
 #[derive(clap::Args, Debug)]
 pub struct MatchersArgs {
@@ -524,6 +561,11 @@ pub struct MatchersArgs {
     /// The repository's folder, holding `worlds/`, `scenarios/robots/` and `tests/data/corrected/`.
     #[arg(long, default_value = ".")]
     pub root: PathBuf,
+    /// Also two rows of this SLAM-corrected CARMEN log (repeatable), each line's stated pose
+    /// the truth: its consecutive pairs from guesses σ 5 cm / 2° off and σ 20 cm / 10° off.
+    /// The standard rows stay as they are.
+    #[arg(long, value_name = "PATH")]
+    pub log: Vec<PathBuf>,
     /// Write `matchers.json` (every row's figures) and `pairs.csv` (every match: errors, flag,
     /// quality figures) into this folder too.
     #[arg(long)]
@@ -619,7 +661,10 @@ pub fn main(args: MatchersArgs) -> Result<(), CommandError> {
     } else {
         args.matchers.clone()
     };
-    let sets = standard_sets(&args.root, args.pairs, args.seed)?;
+    let mut sets = standard_sets(&args.root, args.pairs, args.seed)?;
+    for path in &args.log {
+        sets.extend(extra_log_sets(path, args.pairs, args.seed)?);
+    }
     if let Some(spec) = &args.show {
         let dir = args.out.as_ref().ok_or_else(|| {
             CommandError::option("--show", "needs --out DIR to write the picture in", spec)
