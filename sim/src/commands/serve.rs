@@ -449,6 +449,8 @@ pub struct LmsEmulator {
     mode: u8,
     config: LmsConfig,
     requested: bool,
+    /// The variant its scans are: scan angle in degrees and resolution in hundredths of one.
+    variant: (u16, u16),
 }
 
 impl Default for LmsEmulator {
@@ -465,6 +467,19 @@ impl LmsEmulator {
             mode: sick::MODE_REQUEST_VALUES,
             config: LmsConfig([0; sick::CONFIG_LENGTH]).with_mm_32m(),
             requested: false,
+            variant: (180, 50),
+        }
+    }
+
+    /// [`LmsEmulator::new`] for scans whose first beam lies at `angle_min` and whose beams
+    /// `increment` apart (radians): the variant it accepts (`3B`) is theirs, 180° or 100° at
+    /// 1°, 0.5° or 0.25°, rounded to the telegram's units.
+    pub fn for_field(angle_min: f64, increment: f64) -> Self {
+        let angle = (-2.0 * angle_min.to_degrees()).round().clamp(0.0, 360.0) as u16;
+        let resolution = (100.0 * increment.to_degrees()).round().clamp(0.0, 1000.0) as u16;
+        LmsEmulator {
+            variant: (angle, resolution),
+            ..Self::new()
         }
     }
 
@@ -494,12 +509,14 @@ impl LmsEmulator {
                 None
             }
             (sick::SET_VARIANT, [a0, a1, r0, r1]) => {
-                let ok =
-                    u16::from_le_bytes([*a0, *a1]) == 180 && u16::from_le_bytes([*r0, *r1]) == 50;
-                Some(reply(
-                    sick::VARIANT_REPLY,
-                    vec![u8::from(ok), 0xB4, 0x00, 0x32, 0x00],
-                ))
+                // The twin's laser is the robot file's: only its own variant is offered.
+                let (angle, resolution) = self.variant;
+                let ok = u16::from_le_bytes([*a0, *a1]) == angle
+                    && u16::from_le_bytes([*r0, *r1]) == resolution;
+                let mut answer = vec![u8::from(ok)];
+                answer.extend(angle.to_le_bytes());
+                answer.extend(resolution.to_le_bytes());
+                Some(reply(sick::VARIANT_REPLY, answer))
             }
             (sick::REQUEST_CONFIG, []) => Some(reply(sick::CONFIG_REPLY, self.config.0.to_vec())),
             (sick::SET_CONFIG, data) if data.len() == sick::CONFIG_LENGTH => {
@@ -743,7 +760,10 @@ impl Server {
                 face: open(Served::Laser, offer)?,
                 baud: twin.laser().baud(),
                 decoder: TelegramDecoder::new(),
-                lms: LmsEmulator::new(),
+                lms: {
+                    let (angle_min, increment) = twin.laser().field();
+                    LmsEmulator::for_field(angle_min, increment)
+                },
                 out: VecDeque::new(),
                 out_bytes: 0,
                 tx_free: Stamp::ZERO,
@@ -913,6 +933,32 @@ mod tests {
         let variant = answer(&mut lms, Telegram::set_variant(100, 25));
         assert_eq!(variant.data[0], 0, "only 180° at 0.5° is offered");
         assert_eq!(lms.handle(&Telegram::request(0x66, vec![])), vec![NAK]);
+    }
+
+    /// The variant offered is the laser's own, read from its field, and the reply states it.
+    #[test]
+    fn the_lms_offers_its_own_variant() {
+        for (first_deg, step_deg, angle, resolution) in [
+            (-90.0, 0.5, 180, 50),
+            (-90.0, 1.0, 180, 100),
+            (-50.0, 0.25, 100, 25),
+        ] {
+            let mut lms =
+                LmsEmulator::for_field(f64::to_radians(first_deg), f64::to_radians(step_deg));
+            let own = answer(&mut lms, Telegram::set_variant(angle, resolution));
+            let mut expected = vec![1];
+            expected.extend(angle.to_le_bytes());
+            expected.extend(resolution.to_le_bytes());
+            assert_eq!(own.data, expected);
+            let other = answer(
+                &mut lms,
+                Telegram::set_variant(180, if resolution == 50 { 100 } else { 50 }),
+            );
+            assert_eq!(
+                other.data[0], 0,
+                "{angle}° at {resolution}: another variant refused"
+            );
+        }
     }
 }
 
