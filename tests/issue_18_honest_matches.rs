@@ -307,6 +307,18 @@ fn twin_matchers_prints_the_table() {
         .unwrap();
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--pairs"));
+    // Run from elsewhere, the command says where it looks for its worlds and logs.
+    let elsewhere = Command::new(env!("CARGO_BIN_EXE_twin"))
+        .args(["matchers", "--pairs", "2"])
+        .current_dir(std::env::temp_dir())
+        .output()
+        .unwrap();
+    assert!(!elsewhere.status.success());
+    let stderr = String::from_utf8_lossy(&elsewhere.stderr);
+    assert!(
+        stderr.contains("--root must be the repository's folder"),
+        "{stderr}"
+    );
 }
 
 /// `twin matchers --log PATH` adds two rows from a corrected log of one's own (here the first

@@ -447,6 +447,13 @@ pub fn table(rows: &[Row]) -> String {
 /// The standard sets: synthetic at 0 % and 20 % outliers, each corrected log, and the large
 /// guess over the three logs; `n` pairs each (a log gives at most its scans less one).
 pub fn standard_sets(root: &Path, n: usize, seed: u64) -> Result<Vec<CaseSet>, CommandError> {
+    if !root.join("worlds").is_dir() || !root.join("tests/data/corrected").is_dir() {
+        return Err(CommandError::option(
+            "--root",
+            "must be the repository's folder, holding worlds/ and tests/data/corrected/ (run from there or give --root)",
+            root.display(),
+        ));
+    }
     let load = |p: &str| WorldDescription::load(root.join(p));
     let lab_text = std::fs::read_to_string(root.join("worlds/lab.toml")).map_err(|source| {
         CommandError::Read {
