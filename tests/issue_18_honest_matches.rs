@@ -470,6 +470,55 @@ fn restarts_rescue_large_guesses() {
     }
 }
 
+/// From guesses 20 cm and 10° off, Freiburg 101's corridor lets a match slide a metre or more
+/// along it and still be trusted. A line-assisted Lorentzian that checks a trusted answer more
+/// than `FAR_SLIDE_M` from the guess against the coarse search's best start trusts fewer such
+/// answers, loses no right one, and changes no answer that stayed near its guess; over four
+/// seeds (each has the slide on the corridor's pair 8 without the check).
+#[test]
+fn a_trusted_answer_far_from_the_guess_is_checked() {
+    use robot::localization::{FAR_SLIDE_M, Lorentz};
+    let unchecked = Lorentz {
+        far_slide_m: None,
+        ..Lorentz::with_lines()
+    };
+    let checked = Lorentz::with_lines();
+    assert_eq!(checked.far_slide_m, Some(FAR_SLIDE_M));
+    let (mut slid_before, mut slid_after) = (0, 0);
+    for seed in [1, 4, 7, 8] {
+        let sets = sets(150, seed);
+        let large = sets.last().expect("the large-guess row");
+        assert!(large.name.contains("20 cm"), "{}", large.name);
+        // The pooled row holds 50 pairs of each log in turn: Freiburg 101's are the second 50.
+        for (k, case) in large.cases.iter().enumerate().skip(50).take(50) {
+            let before = unchecked.match_scans(&case.reference, &case.current, case.guess);
+            let after = checked.match_scans(&case.reference, &case.current, case.guess);
+            let slid = |r: &robot::localization::MatchResult| {
+                let off = case.truth.relative(&r.pose);
+                r.converged && off.x.hypot(off.y) > 0.3
+            };
+            slid_before += usize::from(slid(&before));
+            slid_after += usize::from(slid(&after));
+            assert!(
+                !is_right(large, case, &before) || is_right(large, case, &after),
+                "seed {seed}, pair {k}: a right answer lost"
+            );
+            let went = case.guess.relative(&before.pose);
+            if went.x.hypot(went.y) <= FAR_SLIDE_M {
+                assert_eq!(before.pose, after.pose, "seed {seed}, pair {k}");
+            }
+        }
+    }
+    assert!(
+        slid_before >= 4,
+        "the slide is gone without the check: {slid_before}"
+    );
+    assert!(
+        slid_after < slid_before,
+        "trusted slides {slid_after} with the check, {slid_before} without"
+    );
+}
+
 /// From a guess 20 cm and 10° off, a line-assisted Lorentzian that tries its wide second
 /// schedule (σ 20 cm first) when its answer is untrusted, or fits loosely after going far, is
 /// right at least as often as without it on each of two seeds and more often over both; on the
