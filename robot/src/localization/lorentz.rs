@@ -1050,18 +1050,16 @@ impl Lorentz {
                 iterations,
                 ..result
             });
+            // Trusted far from the guess: checked against the coarse search's best start, its
+            // pairs held to their projections as the restarts' are (below).
             let travelled = guess.relative(&chosen.pose);
-            let slid = self
-                .far_slide_m
-                .is_some_and(|far| travelled.x.hypot(travelled.y) > far);
+            let slid = rule.trusts(&chosen.quality)
+                && self
+                    .far_slide_m
+                    .is_some_and(|far| travelled.x.hypot(travelled.y) > far);
             let Some((window, _)) = self.coarse.as_ref().filter(|_| slid) else {
                 return chosen;
             };
-            if !rule.trusts(&chosen.quality) {
-                return chosen;
-            }
-            // Far from the guess, and trusted: checked against the coarse search's best start,
-            // its pairs held to their projections as the restarts' are (below).
             if let Some(assist) = &mut lines {
                 assist.spread = None;
             }
@@ -1137,7 +1135,6 @@ impl Lorentz {
     /// `window` around `guess` ([`correlative::best_starts`]): of their trusted answers that
     /// fit more than `floor` of the current points, the one that fits most, and the iterations
     /// of all of them.
-    #[allow(clippy::too_many_arguments)]
     fn match_coarse_starts(
         &self,
         (sigmas, crowd): (&[f64], Option<f64>),
