@@ -488,23 +488,35 @@ pub enum ValuesError {
 }
 
 /// The LMS's variants (`3B`, [`Telegram::set_variant`]) by the number of values a scan carries:
-/// the count, the first beam's bearing and the step, degrees. The LMS sweeps from its right:
-/// 180° from −90°, 100° (centred ahead) from −50°.
-const LMS_FIELDS: [(usize, f64, f64); 5] = [
-    (181, -90.0, 1.0),
-    (361, -90.0, 0.5),
-    (101, -50.0, 1.0),
-    (201, -50.0, 0.5),
-    (401, -50.0, 0.25),
+/// the count, the scan angle in degrees and the resolution in hundredths of a degree, as the
+/// telegram states them. The LMS sweeps from its right, centred ahead: 180° from −90°, 100°
+/// from −50°.
+const LMS_VARIANTS: [(usize, u16, u16); 5] = [
+    (181, 180, 100),
+    (361, 180, 50),
+    (101, 100, 100),
+    (201, 100, 50),
+    (401, 100, 25),
 ];
 
-/// The first beam's bearing and the step, radians, of a scan of `count` values as the LMS sends
-/// it; `None` when no variant sends that many.
-pub fn lms_field(count: usize) -> Option<(f64, f64)> {
-    LMS_FIELDS
+/// The variant that sends scans of `count` values: its scan angle in degrees and resolution in
+/// hundredths of a degree; `None` when no variant sends that many.
+pub fn lms_variant(count: usize) -> Option<(u16, u16)> {
+    LMS_VARIANTS
         .iter()
         .find(|(n, _, _)| *n == count)
-        .map(|(_, first, step)| (first.to_radians(), step.to_radians()))
+        .map(|&(_, angle, resolution)| (angle, resolution))
+}
+
+/// The first beam's bearing and the step, radians, of a scan of `count` values as the LMS sends
+/// it ([`lms_variant`]); `None` when no variant sends that many.
+pub fn lms_field(count: usize) -> Option<(f64, f64)> {
+    lms_variant(count).map(|(angle, resolution)| {
+        (
+            (-f64::from(angle) / 2.0).to_radians(),
+            (f64::from(resolution) / 100.0).to_radians(),
+        )
+    })
 }
 
 /// The values of one scan as the LMS sends them in the 32 m measuring mode.

@@ -471,14 +471,11 @@ impl LmsEmulator {
         }
     }
 
-    /// [`LmsEmulator::new`] for scans whose first beam lies at `angle_min` and whose beams
-    /// `increment` apart (radians): the variant it accepts (`3B`) is theirs, 180° or 100° at
-    /// 1°, 0.5° or 0.25°, rounded to the telegram's units.
-    pub fn for_field(angle_min: f64, increment: f64) -> Self {
-        let angle = (-2.0 * angle_min.to_degrees()).round().clamp(0.0, 360.0) as u16;
-        let resolution = (100.0 * increment.to_degrees()).round().clamp(0.0, 1000.0) as u16;
+    /// [`LmsEmulator::new`] whose scans are `variant` (scan angle in degrees, resolution in
+    /// hundredths of one, [`sick::lms_variant`]): the only variant it accepts (`3B`).
+    pub fn with_variant(variant: (u16, u16)) -> Self {
         LmsEmulator {
-            variant: (angle, resolution),
+            variant,
             ..Self::new()
         }
     }
@@ -760,10 +757,8 @@ impl Server {
                 face: open(Served::Laser, offer)?,
                 baud: twin.laser().baud(),
                 decoder: TelegramDecoder::new(),
-                lms: {
-                    let (angle_min, increment) = twin.laser().field();
-                    LmsEmulator::for_field(angle_min, increment)
-                },
+                lms: sick::lms_variant(twin.laser().beams().len())
+                    .map_or_else(LmsEmulator::new, LmsEmulator::with_variant),
                 out: VecDeque::new(),
                 out_bytes: 0,
                 tx_free: Stamp::ZERO,
@@ -938,13 +933,9 @@ mod tests {
     /// The variant offered is the laser's own, read from its field, and the reply states it.
     #[test]
     fn the_lms_offers_its_own_variant() {
-        for (first_deg, step_deg, angle, resolution) in [
-            (-90.0, 0.5, 180, 50),
-            (-90.0, 1.0, 180, 100),
-            (-50.0, 0.25, 100, 25),
-        ] {
-            let mut lms =
-                LmsEmulator::for_field(f64::to_radians(first_deg), f64::to_radians(step_deg));
+        for (beams, angle, resolution) in [(361, 180, 50), (181, 180, 100), (401, 100, 25)] {
+            let variant = sick::lms_variant(beams).expect("an LMS variant");
+            let mut lms = LmsEmulator::with_variant(variant);
             let own = answer(&mut lms, Telegram::set_variant(angle, resolution));
             let mut expected = vec![1];
             expected.extend(angle.to_le_bytes());
@@ -1075,10 +1066,8 @@ pub fn main(args: ServeArgs) -> Result<(), super::CommandError> {
     let scenario = crate::config::Scenario::load(&args.scenario)?;
     // The host reads a scan's field from its count of values, as an LMS sends it.
     let laser = &scenario.robot.laser;
-    let spans =
-        robot::protocol::sick::lms_field(usize::from(laser.beams)).is_some_and(|(_, step)| {
-            (step * f64::from(laser.beams - 1) - laser.fov_deg.get().to_radians()).abs() < 1e-9
-        });
+    let spans = sick::lms_variant(usize::from(laser.beams))
+        .is_some_and(|(angle, _)| f64::from(angle) == laser.fov_deg.get());
     if !spans {
         return Err(CommandError::option(
             "the scenario",

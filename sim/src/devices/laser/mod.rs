@@ -211,11 +211,6 @@ impl LaserModel {
         &self.beams
     }
 
-    /// The first beam's bearing and the step between beams, radians.
-    pub fn field(&self) -> (f64, f64) {
-        (self.angle_min, self.angle_increment)
-    }
-
     /// The laser's pose on the base.
     pub fn mount(&self) -> Pose2 {
         self.mount
