@@ -7,7 +7,7 @@ use robot::localization::{
     MapBuilder, MapConfig, MatcherKind, RangeScan, Reference, ScanMatcher, TrustRule,
 };
 use robot::{Pose2, Stamp};
-use sim::commands::matchers::{self, CaseSet, Row};
+use sim::commands::matchers::{self, CaseSet, Matched, Row};
 use std::collections::BTreeMap;
 use std::process::Command;
 
@@ -301,6 +301,23 @@ fn twin_matchers_prints_the_table() {
     // 4 pairs in each of five rows and 2 from each log in the pooled large-guess row, two
     // matchers.
     assert_eq!(csv.lines().count(), 1 + 2 * (5 * 4 + 6), "{csv}");
+    // The closure: a figure on each log's row, none on the synthetic ones; one line a matcher
+    // for each triangle of three scans in a row (3 of each log's 4 pairs, 1 of each log's 2
+    // in the pooled row).
+    for line in table.lines().filter(|l| l.contains("| lorentz |")) {
+        let closure = line.rsplit('|').nth(1).unwrap().trim();
+        if line.contains("synthetic") {
+            assert_eq!(closure, "—", "{line}");
+        } else {
+            assert!(
+                closure.ends_with('°') && closure.contains(" mm, "),
+                "{line}"
+            );
+        }
+    }
+    let closures = std::fs::read_to_string(out.join("closures.csv")).unwrap();
+    assert_eq!(closures.lines().count(), 1 + 2 * (3 * 3 + 3), "{closures}");
+    assert!(closures.starts_with(matchers::CLOSURES_HEADER));
     let bad = Command::new(env!("CARGO_BIN_EXE_twin"))
         .args(["matchers", "--pairs", "0"])
         .output()
@@ -318,6 +335,95 @@ fn twin_matchers_prints_the_table() {
     assert!(
         stderr.contains("--root must be the repository's folder"),
         "{stderr}"
+    );
+}
+
+/// `twin matchers --seeds 2` pools two seeds into each row: its `pairs.csv` and `closures.csv`
+/// are the two single-seed runs' one after the other (each line names its seed), and a row's
+/// pairs and successes are the two runs' summed. `--seeds 0` is refused by name.
+#[test]
+fn twin_matchers_pools_seeds_into_its_rows() {
+    let out = tempfile_dir("twin-matchers-seeds");
+    let run = |args: &[&str], dir: &str| {
+        let run = Command::new(env!("CARGO_BIN_EXE_twin"))
+            .args(["matchers", "--pairs", "3", "--quiet", "--matchers"])
+            .args(["lorentz-lines,pl-icp", "--out"])
+            .arg(out.join(dir))
+            .args(args)
+            .current_dir(repo())
+            .output()
+            .unwrap();
+        let read =
+            |file: &str| std::fs::read_to_string(out.join(dir).join(file)).unwrap_or_default();
+        let rows: Vec<serde_json::Value> =
+            serde_json::from_str(&read("matchers.json")).unwrap_or_default();
+        (run, read("pairs.csv"), read("closures.csv"), rows)
+    };
+    let (_, one_pairs, one_closures, one_rows) = run(&["--seed", "1"], "one");
+    let (_, two_pairs, two_closures, two_rows) = run(&["--seed", "2"], "two");
+    let (both, pairs, closures, rows) = run(&["--seed", "1", "--seeds", "2"], "both");
+    assert!(
+        both.status.success(),
+        "{}",
+        String::from_utf8_lossy(&both.stderr)
+    );
+    let body = |csv: &str| csv.lines().skip(1).map(str::to_string).collect::<Vec<_>>();
+    assert_eq!(body(&pairs), [body(&one_pairs), body(&two_pairs)].concat());
+    assert_eq!(
+        body(&closures),
+        [body(&one_closures), body(&two_closures)].concat()
+    );
+    assert!(pairs.starts_with("seed,set,pair,") && body(&pairs)[0].starts_with("1,"));
+    assert!(body(&pairs).last().unwrap().starts_with("2,"));
+    assert_eq!(rows.len(), 12);
+    for ((row, one), two) in rows.iter().zip(&one_rows).zip(&two_rows) {
+        let pairs = |r: &serde_json::Value| r["pairs"].as_u64().unwrap();
+        let right = |r: &serde_json::Value| r["success"].as_f64().unwrap() * pairs(r) as f64;
+        assert_eq!(row["set"], one["set"]);
+        assert_eq!(pairs(row), pairs(one) + pairs(two), "{row}");
+        assert!((right(row) - right(one) - right(two)).abs() < 1e-9, "{row}");
+        let triangles = |r: &serde_json::Value| r["closure"]["triangles"].as_u64().unwrap_or(0);
+        assert_eq!(triangles(row), triangles(one) + triangles(two), "{row}");
+    }
+    let (bad, ..) = run(&["--seeds", "0"], "bad");
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--seeds must be between 1 and 1000"));
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// A log row's triangles are three scans in a row: the log's own poses chain exactly (the
+/// skip pair's truth is its two pairs' truths composed), in every log row and in the pooled
+/// large-guess row, whose triangles never span two logs; a matcher's closure is measured
+/// against that chain, and for `lorentz-lines` it is millimetres on most of Belgioioso's
+/// triangles.
+#[test]
+fn a_logs_triangles_chain_its_own_poses() {
+    let sets = sets(30, 4);
+    for set in &sets {
+        if set.name.starts_with("synthetic") {
+            assert!(set.triangles.is_empty(), "{}", set.name);
+            continue;
+        }
+        // 29 for each log; 9 for each log's 10 pairs in the pooled row.
+        let expected = if set.name.contains("20 cm") { 27 } else { 29 };
+        assert_eq!(set.triangles.len(), expected, "{}", set.name);
+        for t in &set.triangles {
+            let (a, b) = (&set.cases[t.first].truth, &set.cases[t.second].truth);
+            let (m, rad) = matchers::closure(a, b, &t.skip.truth);
+            assert!(m < 1e-9 && rad < 1e-9, "{} {t:?}: {m} m", set.name);
+            // Its scans are the pairs': the skip starts where the first does and ends where
+            // the second does.
+            assert_eq!(t.skip.reference.ranges, set.cases[t.first].reference.ranges);
+            assert_eq!(t.skip.current.ranges, set.cases[t.second].current.ranges);
+        }
+    }
+    let belgioioso = sets.iter().find(|s| s.name.contains("belgioioso")).unwrap();
+    let row = &matchers::evaluate(belgioioso, &[MatcherKind::LorentzLines], &mut |_| {})[0];
+    let closure = row.closure.expect("a log row has a closure");
+    assert_eq!(closure.triangles, 29);
+    assert!(
+        closure.m[0] < 0.01 && closure.rad[0] < 0.5f64.to_radians(),
+        "{closure:?}"
     );
 }
 
@@ -408,6 +514,94 @@ fn a_corrected_log_of_ones_own_adds_two_rows() {
     assert!(!ok);
     assert!(
         stderr.contains("cut.log:") && stderr.contains("line ends early"),
+        "{stderr}"
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// `twin matchers --raw-log PATH` adds a row of a log without a reference (here the MIT log's
+/// first 30 scans, whose poses are raw odometry) in a table of its own, with what needs no
+/// truth: the flagged share, the time and the closure, which for `lorentz-lines` and `pl-icp`
+/// is centimetres at most on the median triangle. No success is claimed for it, and the
+/// standard rows' pairs stay as they were. A log too short for a triangle is refused by name.
+#[test]
+fn a_log_without_a_reference_gets_a_row_of_closures() {
+    let out = tempfile_dir("twin-matchers-raw");
+    std::fs::create_dir_all(&out).unwrap();
+    let text = std::fs::read_to_string(repo().join("tests/data/mit-csail.clf")).unwrap();
+    let head = |scans_wanted: usize| {
+        let mut kept = Vec::new();
+        let mut scans = 0;
+        for line in text.lines() {
+            scans += usize::from(line.starts_with("FLASER "));
+            if scans > scans_wanted {
+                break;
+            }
+            kept.push(line);
+        }
+        kept.join("\n") + "\n"
+    };
+    let log = out.join("mit-start.clf");
+    std::fs::write(&log, head(30)).unwrap();
+    let run = |log: &std::path::Path, dir: &std::path::Path| {
+        Command::new(env!("CARGO_BIN_EXE_twin"))
+            .args(["matchers", "--pairs", "6", "--quiet"])
+            .args(["--matchers", "lorentz-lines,pl-icp", "--raw-log"])
+            .arg(log)
+            .arg("--out")
+            .arg(dir)
+            .current_dir(repo())
+            .output()
+            .unwrap()
+    };
+    let done = run(&log, &out.join("raw"));
+    assert!(
+        done.status.success(),
+        "{}",
+        String::from_utf8_lossy(&done.stderr)
+    );
+    let stdout = String::from_utf8(done.stdout).unwrap();
+    let (judged, raw) = stdout
+        .split_once("| pairs without a reference |")
+        .expect("a second table");
+    assert!(!judged.contains("raw, "), "{judged}");
+    assert!(
+        raw.contains("| raw, mit-start (6) | lorentz-lines |"),
+        "{raw}"
+    );
+    let rows: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("raw/raw-logs.json")).unwrap())
+            .unwrap();
+    let rows = rows.as_array().unwrap();
+    assert_eq!(rows.len(), 2);
+    for row in rows {
+        assert!(row.get("success").is_none(), "{row}");
+        let closure = &row["closure"];
+        assert_eq!(closure["triangles"], 5, "{row}");
+        assert!(closure["m"][0].as_f64().unwrap() < 0.02, "{row}");
+    }
+    let dir = out.join("raw");
+    let pairs = std::fs::read_to_string(dir.join("pairs.csv")).unwrap();
+    assert!(
+        !pairs.contains("\"raw, "),
+        "a raw row's pairs are not judged"
+    );
+    let closures = std::fs::read_to_string(dir.join("closures.csv")).unwrap();
+    assert_eq!(
+        closures
+            .lines()
+            .filter(|l| l.starts_with("0,\"raw, mit-start\","))
+            .count(),
+        2 * 5
+    );
+
+    let short = out.join("two-scans.clf");
+    std::fs::write(&short, head(2)).unwrap();
+    let refused = run(&short, &out.join("short"));
+    assert!(!refused.status.success());
+    let stderr = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        stderr.contains("--raw-log") && stderr.contains("at least three scans"),
         "{stderr}"
     );
     let _ = std::fs::remove_dir_all(&out);
@@ -764,6 +958,11 @@ fn log_pairs(log: &str, range: std::ops::Range<usize>, seed: u64) -> CaseSet {
         .find(|s| s.name.contains(log))
         .expect("the log's row");
     set.cases.drain(..range.start);
+    set.triangles.retain(|t| t.first >= range.start);
+    for t in &mut set.triangles {
+        t.first -= range.start;
+        t.second -= range.start;
+    }
     set
 }
 
@@ -778,7 +977,11 @@ fn the_scans_dispute_a_corrected_pose_where_it_is_wrong() {
     for seed in [1, 7] {
         let set = log_pairs("freiburg", 246..252, seed);
         let mut outcomes = Vec::new();
-        let rows = matchers::evaluate(&set, &kinds, &mut |o| outcomes.push(o));
+        let rows = matchers::evaluate(&set, &kinds, &mut |m| {
+            if let Matched::Pair(o) = m {
+                outcomes.push(o)
+            }
+        });
         for o in &outcomes {
             // Pairs 248, 249 and 250 are the third to fifth kept.
             let pair = o.pair + 246;
@@ -824,7 +1027,11 @@ fn two_matchers_agree_against_a_corrected_pose_where_it_is_off() {
         let start = pairs.start;
         let set = log_pairs("edmonton", pairs, seed);
         let mut outcomes = Vec::new();
-        let mut rows = matchers::evaluate(&set, &kinds, &mut |o| outcomes.push(o));
+        let mut rows = matchers::evaluate(&set, &kinds, &mut |m| {
+            if let Matched::Pair(o) = m {
+                outcomes.push(o)
+            }
+        });
         matchers::mark_agreed(&mut outcomes, &mut rows);
         for o in outcomes
             .iter()
@@ -846,7 +1053,11 @@ fn two_matchers_agree_against_a_corrected_pose_where_it_is_off() {
     }
     for set in sets(40, 3).iter().filter(|s| s.name.contains("synthetic")) {
         let mut outcomes = Vec::new();
-        let mut rows = matchers::evaluate(set, &kinds, &mut |o| outcomes.push(o));
+        let mut rows = matchers::evaluate(set, &kinds, &mut |m| {
+            if let Matched::Pair(o) = m {
+                outcomes.push(o)
+            }
+        });
         matchers::mark_agreed(&mut outcomes, &mut rows);
         assert!(rows.iter().all(|r| r.agreed == 0), "{rows:?}");
     }

@@ -48,13 +48,32 @@ pub struct Case {
     pub guess: Pose2,
 }
 
+/// Three scans of a log in a row, `k`, `k + 1` and `k + 2`: the set's pairs `first` (`k` to
+/// `k + 1`) and `second` (`k + 1` to `k + 2`), and the pair `skip` straight from `k` to `k + 2`.
+/// A matcher's answer to `skip` should be its answers to `first` and `second` chained: how far
+/// it is (the *closure*) measures the answers' own scatter without trusting any reference.
+#[derive(Clone, Debug)]
+pub struct Triangle {
+    /// The index in the set's cases of the pair from scan `k` to `k + 1`.
+    pub first: usize,
+    /// The index of the pair from scan `k + 1` to `k + 2`.
+    pub second: usize,
+    /// The pair from scan `k` to `k + 2`, with its own guess.
+    pub skip: Case,
+}
+
 /// Pairs of one kind, and when a match of them counts as a success.
 #[derive(Clone, Debug)]
 pub struct CaseSet {
     /// The row's name.
     pub name: String,
+    /// The seed its guesses (and synthetic pairs) were drawn from.
+    pub seed: u64,
     /// The pairs.
     pub cases: Vec<Case>,
+    /// A log's consecutive pairs, two by two, with the pair that skips their middle scan (none
+    /// for synthetic pairs, which are not a sequence).
+    pub triangles: Vec<Triangle>,
     /// A match within this distance of the truth, metres …
     pub tolerance_m: f64,
     /// … and this angle, radians, is a success.
@@ -126,13 +145,17 @@ pub fn synthetic_set(
         .collect::<Result<_, CommandError>>()?;
     Ok(CaseSet {
         name: name.to_string(),
+        seed,
         cases,
+        triangles: Vec::new(),
         tolerance_m: 0.05,
         tolerance_rad: 1f64.to_radians(),
     })
 }
 
-/// Up to `n` consecutive pairs of a SLAM-corrected CARMEN log, whose scans' poses are the truth.
+/// Up to `n` consecutive pairs of a SLAM-corrected CARMEN log, whose scans' poses are the truth,
+/// and their [`Triangle`]s (each skip pair's guess drawn from its own stream, so the pairs'
+/// guesses are those of a set without them).
 pub fn log_set(
     name: &str,
     log: &Path,
@@ -142,25 +165,38 @@ pub fn log_set(
 ) -> Result<CaseSet, CommandError> {
     // Each scan with the pose its own FLASER line states: a corrected log's corrected pose.
     let scans = robot::logs::read_log(log)?.scans_with_logged_pose();
+    let case = |(from, to): (&(RangeScan, Pose2), &(RangeScan, Pose2)), rng: &mut SimRng| {
+        let truth = from.1.relative(&to.1);
+        Case {
+            reference: from.0.clone(),
+            current: to.0.clone(),
+            truth,
+            guess: error.guess(truth, rng),
+        }
+    };
     let stream = rng::stream_seed(seed, &format!("matchers/{name}"));
-    let cases = scans
+    let cases: Vec<Case> = scans
         .windows(2)
         .take(n)
         .enumerate()
-        .map(|(k, w)| {
-            let mut rng = rng::substream(stream, k as u64);
-            let truth = w[0].1.relative(&w[1].1);
-            Case {
-                reference: w[0].0.clone(),
-                current: w[1].0.clone(),
-                truth,
-                guess: error.guess(truth, &mut rng),
-            }
+        .map(|(k, w)| case((&w[0], &w[1]), &mut rng::substream(stream, k as u64)))
+        .collect();
+    let skips = rng::stream_seed(seed, &format!("matchers/{name}/skips"));
+    let triangles = scans
+        .windows(3)
+        .take(cases.len().saturating_sub(1))
+        .enumerate()
+        .map(|(k, w)| Triangle {
+            first: k,
+            second: k + 1,
+            skip: case((&w[0], &w[2]), &mut rng::substream(skips, k as u64)),
         })
         .collect();
     Ok(CaseSet {
         name: name.to_string(),
+        seed,
         cases,
+        triangles,
         tolerance_m: 0.10,
         tolerance_rad: 2f64.to_radians(),
     })
@@ -195,6 +231,82 @@ pub struct Row {
     /// Failures another matcher of the run agrees with against the reference pose: set by
     /// [`mark_agreed`] (0 before it, and when one matcher runs).
     pub agreed: usize,
+    /// Over the set's [`Triangle`]s (none for synthetic pairs): the median and 95th percentile
+    /// of the closure's translation, metres, and of its rotation, radians.
+    pub closure: Option<Closure>,
+}
+
+/// How far a matcher's answers to a log's pairs fail to chain: over [`Triangle`]s, the answer
+/// to the pair skipping a scan against the answers to the two pairs through it. No reference
+/// enters it, so it means the same on a log whose poses are loose or raw odometry; an error
+/// every answer shares (a scale, a constant bias) chains and does not show.
+#[derive(Copy, Clone, Debug, serde::Serialize)]
+pub struct Closure {
+    /// Triangles measured.
+    pub triangles: usize,
+    /// Median and 95th percentile of the closure's translation, metres.
+    pub m: [f64; 2],
+    /// Median and 95th percentile of the closure's rotation, radians.
+    pub rad: [f64; 2],
+}
+
+/// One matcher's closure of one [`Triangle`]: what `closures.csv` lists.
+#[derive(Clone, Debug)]
+pub struct TriangleOutcome {
+    /// The seed of the set's guesses.
+    pub seed: u64,
+    /// The set's name.
+    pub set: String,
+    /// The triangle's number in its set (the index of its first pair).
+    pub triangle: usize,
+    /// The matcher.
+    pub matcher: MatcherKind,
+    /// The closure's translation and rotation, metres and radians.
+    pub closure: (f64, f64),
+    /// Whether the matcher trusted all three answers.
+    pub trusted: bool,
+    /// The answer to the pair skipping the middle scan.
+    pub skip: Pose2,
+}
+
+/// The header of `closures.csv` (the seed of a `--raw-log` row, whose guesses draw nothing, is
+/// 0).
+pub const CLOSURES_HEADER: &str =
+    "seed,set,triangle,matcher,closure_mm,closure_deg,trusted,skip_x_m,skip_y_m,skip_theta_deg";
+
+impl TriangleOutcome {
+    /// The outcome as a line of `closures.csv`.
+    pub fn csv(&self) -> String {
+        format!(
+            "{},\"{}\",{},{},{:.2},{:.3},{},{:.5},{:.5},{:.4}",
+            self.seed,
+            self.set,
+            self.triangle,
+            self.matcher,
+            self.closure.0 * 1e3,
+            self.closure.1.to_degrees(),
+            u8::from(self.trusted),
+            self.skip.x,
+            self.skip.y,
+            self.skip.theta.to_degrees(),
+        )
+    }
+}
+
+/// What [`evaluate`] reports as soon as it is known: a pair's match, or a triangle's closure.
+#[derive(Clone, Debug)]
+pub enum Matched {
+    /// One match of one pair.
+    Pair(Outcome),
+    /// One matcher's closure of one triangle.
+    Triangle(TriangleOutcome),
+}
+
+/// The closure of answers `first` (scan `k` to `k + 1`) and `second` (`k + 1` to `k + 2`)
+/// against `skip` (`k` to `k + 2`): translation and rotation, metres and radians.
+pub fn closure(first: &Pose2, second: &Pose2, skip: &Pose2) -> (f64, f64) {
+    let off = first.compose(second).relative(skip);
+    (off.x.hypot(off.y), off.theta.abs())
 }
 
 /// How many times the reference pose's share of fitting points a trusted answer must fit for
@@ -212,6 +324,8 @@ pub const AGREE_MARGIN: f64 = 0.05;
 /// One match of one pair: what `pairs.csv` lists.
 #[derive(Clone, Debug)]
 pub struct Outcome {
+    /// The seed of the set's guesses.
+    pub seed: u64,
     /// The set's name.
     pub set: String,
     /// The pair's number in its set.
@@ -238,14 +352,15 @@ pub struct Outcome {
 }
 
 /// The header of `pairs.csv`.
-pub const OUTCOMES_HEADER: &str = "set,pair,matcher,success,error_mm,error_deg,converged,settled,iterations,inliers,inlier_share,rms_mm,sigma_x_mm,sigma_y_mm,sigma_theta_deg,step_mm,step_deg,truth_inlier_share,disputed,guess_error_mm,guess_error_deg,agreed,x_m,y_m,theta_deg";
+pub const OUTCOMES_HEADER: &str = "seed,set,pair,matcher,success,error_mm,error_deg,converged,settled,iterations,inliers,inlier_share,rms_mm,sigma_x_mm,sigma_y_mm,sigma_theta_deg,step_mm,step_deg,truth_inlier_share,disputed,guess_error_mm,guess_error_deg,agreed,x_m,y_m,theta_deg";
 
 impl Outcome {
     /// The outcome as a line of `pairs.csv`.
     pub fn csv(&self) -> String {
         let q = &self.result.quality;
         format!(
-            "\"{}\",{},{},{},{:.2},{:.3},{},{},{},{},{:.4},{:.2},{:.2},{:.2},{:.3},{:.2},{:.3},{:.4},{},{:.2},{:.3},{},{:.5},{:.5},{:.4}",
+            "{},\"{}\",{},{},{},{:.2},{:.3},{},{},{},{},{:.4},{:.2},{:.2},{:.2},{:.3},{:.2},{:.3},{:.4},{},{:.2},{:.3},{},{:.5},{:.5},{:.4}",
+            self.seed,
             self.set,
             self.pair,
             self.matcher,
@@ -276,12 +391,16 @@ impl Outcome {
 }
 
 /// Marks each failure in `outcomes` that another matcher's answer to the same pair of the same
-/// set lies within [`AGREE`] of, when both answers fit at least [`AGREE_MARGIN`] more of the
+/// set and seed lies within [`AGREE`] of, when both answers fit at least [`AGREE_MARGIN`] more of the
 /// current points than the reference pose; and counts them in the matching `rows`.
 pub fn mark_agreed(outcomes: &mut [Outcome], rows: &mut [Row]) {
-    let mut by_pair: std::collections::BTreeMap<(&str, usize), Vec<usize>> = Default::default();
+    let mut by_pair: std::collections::BTreeMap<(&str, u64, usize), Vec<usize>> =
+        Default::default();
     for (k, o) in outcomes.iter().enumerate() {
-        by_pair.entry((o.set.as_str(), o.pair)).or_default().push(k);
+        by_pair
+            .entry((o.set.as_str(), o.seed, o.pair))
+            .or_default()
+            .push(k);
     }
     let fits = |o: &Outcome| o.result.quality.inlier_share >= o.truth_share + AGREE_MARGIN;
     let mut agreed = vec![false; outcomes.len()];
@@ -311,11 +430,81 @@ pub fn mark_agreed(outcomes: &mut [Outcome], rows: &mut [Row]) {
     }
 }
 
-/// Every matcher of `kinds` on every pair of `set`, one after the other on this thread; each
-/// match's outcome goes to `record` as soon as it is known (so a caller can show progress).
-/// Agreement between matchers needs every answer to a pair first: the rows and outcomes say
-/// none until [`mark_agreed`] is given them.
-pub fn evaluate(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Outcome)) -> Vec<Row> {
+/// Every matcher of `kinds` on every pair of `set`, one after the other on this thread, then on
+/// the skip pair of each of its triangles; each match's outcome and each triangle's closure goes
+/// to `record` as soon as it is known (so a caller can show progress). The skip pairs' times
+/// are not in the row's. Agreement between matchers needs every answer to a pair first: the
+/// rows and outcomes say none until [`mark_agreed`] is given them.
+pub fn evaluate(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Matched)) -> Vec<Row> {
+    tally(set, kinds, record)
+        .into_iter()
+        .map(Tally::row)
+        .collect()
+}
+
+/// What one matcher's matches of one set add up to before their quantiles are taken, so that
+/// the same row of several seeds pools into one ([`Tally::add`]).
+#[derive(Clone, Debug)]
+pub struct Tally {
+    set: String,
+    matcher: MatcherKind,
+    errors_m: Vec<f64>,
+    errors_rad: Vec<f64>,
+    micros: Vec<f64>,
+    success: usize,
+    flagged: usize,
+    flagged_success: usize,
+    disputed: usize,
+    closures_m: Vec<f64>,
+    closures_rad: Vec<f64>,
+}
+
+impl Tally {
+    /// The same row of another seed's pairs, pooled into this one.
+    pub fn add(&mut self, other: Tally) {
+        debug_assert!(self.set == other.set && self.matcher == other.matcher);
+        self.errors_m.extend(other.errors_m);
+        self.errors_rad.extend(other.errors_rad);
+        self.micros.extend(other.micros);
+        self.success += other.success;
+        self.flagged += other.flagged;
+        self.flagged_success += other.flagged_success;
+        self.disputed += other.disputed;
+        self.closures_m.extend(other.closures_m);
+        self.closures_rad.extend(other.closures_rad);
+    }
+
+    /// The row's figures.
+    pub fn row(mut self) -> Row {
+        let pairs = self.errors_m.len();
+        let n = pairs.max(1) as f64;
+        let share = |a: usize, b: usize| if b == 0 { 1.0 } else { a as f64 / b as f64 };
+        let median_p95 = |v: &mut [f64]| [quantile(v, 0.5), quantile(v, 0.95)];
+        let closure = (!self.closures_m.is_empty()).then(|| Closure {
+            triangles: self.closures_m.len(),
+            m: median_p95(&mut self.closures_m),
+            rad: median_p95(&mut self.closures_rad),
+        });
+        Row {
+            set: self.set,
+            matcher: self.matcher,
+            pairs,
+            success: self.success as f64 / n,
+            error_m: median_p95(&mut self.errors_m),
+            error_rad: median_p95(&mut self.errors_rad),
+            median_us: quantile(&mut self.micros, 0.5),
+            flagged: self.flagged as f64 / n,
+            flag_precision: share(self.flagged_success, self.flagged),
+            flag_recall: share(self.flagged_success, self.success),
+            disputed: self.disputed,
+            agreed: 0,
+            closure,
+        }
+    }
+}
+
+/// [`evaluate`]'s work, its figures still unreduced: one [`Tally`] for each of `kinds`.
+pub fn tally(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Matched)) -> Vec<Tally> {
     let truth_shares: Vec<f64> = set
         .cases
         .iter()
@@ -325,29 +514,40 @@ pub fn evaluate(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Out
         .iter()
         .map(|&kind| {
             let matcher = kind.build();
-            let mut errors_m = Vec::with_capacity(set.cases.len());
-            let mut errors_rad = Vec::with_capacity(set.cases.len());
-            let mut micros = Vec::with_capacity(set.cases.len());
-            let (mut success, mut flagged, mut both) = (0usize, 0usize, 0usize);
-            let mut disputed_count = 0;
+            let mut tally = Tally {
+                set: set.name.clone(),
+                matcher: kind,
+                errors_m: Vec::with_capacity(set.cases.len()),
+                errors_rad: Vec::with_capacity(set.cases.len()),
+                micros: Vec::with_capacity(set.cases.len()),
+                success: 0,
+                flagged: 0,
+                flagged_success: 0,
+                disputed: 0,
+                closures_m: Vec::with_capacity(set.triangles.len()),
+                closures_rad: Vec::with_capacity(set.triangles.len()),
+            };
+            let mut answers = Vec::with_capacity(set.cases.len());
             for (pair, case) in set.cases.iter().enumerate() {
                 let clock = Instant::now();
                 let reference = Reference::new(case.reference.points());
                 let result = matcher.align(&reference, &case.current.points(), case.guess);
-                micros.push(clock.elapsed().as_secs_f64() * 1e6);
+                tally.micros.push(clock.elapsed().as_secs_f64() * 1e6);
                 let (em, er) = off_truth(case, &result.pose);
                 let ok = em <= set.tolerance_m && er <= set.tolerance_rad;
-                success += usize::from(ok);
-                flagged += usize::from(result.converged);
-                both += usize::from(ok && result.converged);
-                errors_m.push(em);
-                errors_rad.push(er);
+                tally.success += usize::from(ok);
+                tally.flagged += usize::from(result.converged);
+                tally.flagged_success += usize::from(ok && result.converged);
+                tally.errors_m.push(em);
+                tally.errors_rad.push(er);
                 let truth_share = truth_shares[pair];
                 let disputed = !ok
                     && result.converged
                     && result.quality.inlier_share >= DISPUTE_RATIO * truth_share;
-                disputed_count += usize::from(disputed);
-                record(Outcome {
+                tally.disputed += usize::from(disputed);
+                answers.push((result.pose, result.converged));
+                record(Matched::Pair(Outcome {
+                    seed: set.seed,
                     set: set.name.clone(),
                     pair,
                     matcher: kind,
@@ -358,27 +558,31 @@ pub fn evaluate(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Out
                     truth_share,
                     disputed,
                     agreed: false,
-                });
+                }));
             }
-            let n = set.cases.len().max(1) as f64;
-            let share = |a: usize, b: usize| if b == 0 { 1.0 } else { a as f64 / b as f64 };
-            Row {
-                set: set.name.clone(),
-                matcher: kind,
-                pairs: set.cases.len(),
-                success: success as f64 / n,
-                error_m: [quantile(&mut errors_m, 0.5), quantile(&mut errors_m, 0.95)],
-                error_rad: [
-                    quantile(&mut errors_rad, 0.5),
-                    quantile(&mut errors_rad, 0.95),
-                ],
-                median_us: quantile(&mut micros, 0.5),
-                flagged: flagged as f64 / n,
-                flag_precision: share(both, flagged),
-                flag_recall: share(both, success),
-                disputed: disputed_count,
-                agreed: 0,
+            for (k, triangle) in set.triangles.iter().enumerate() {
+                let (Some(&first), Some(&second)) =
+                    (answers.get(triangle.first), answers.get(triangle.second))
+                else {
+                    continue; // a triangle of pairs the set no longer holds
+                };
+                let skip = &triangle.skip;
+                let reference = Reference::new(skip.reference.points());
+                let result = matcher.align(&reference, &skip.current.points(), skip.guess);
+                let (m, rad) = closure(&first.0, &second.0, &result.pose);
+                tally.closures_m.push(m);
+                tally.closures_rad.push(rad);
+                record(Matched::Triangle(TriangleOutcome {
+                    seed: set.seed,
+                    set: set.name.clone(),
+                    triangle: k,
+                    matcher: kind,
+                    closure: (m, rad),
+                    trusted: first.1 && second.1 && result.converged,
+                    skip: result.pose,
+                }));
             }
+            tally
         })
         .collect()
 }
@@ -413,7 +617,7 @@ fn quantile(values: &mut [f64], q: f64) -> f64 {
 /// the same set (the same run, so the ratio travels between machines).
 pub fn table(rows: &[Row]) -> String {
     let mut out = String::from(
-        "| pairs | matcher | success | median / p95 error | median time | × first | flagged | flag precision / recall | failures disputed | failures agreed |\n|---|---|---|---|---|---|---|---|---|---|\n",
+        "| pairs | matcher | success | median / p95 error | median time | × first | flagged | flag precision / recall | failures disputed | failures agreed | closure median / p95 |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     let mut first_us = f64::NAN;
     let mut last_set = "";
@@ -423,7 +627,7 @@ pub fn table(rows: &[Row]) -> String {
             last_set = &r.set;
         }
         out.push_str(&format!(
-            "| {} ({}) | {} | {:.3} | {:.1} / {:.1} mm, {:.2} / {:.2}° | {:.2} ms | {:.2} | {:.3} | {:.3} / {:.3} | {} | {} |\n",
+            "| {} ({}) | {} | {:.3} | {:.1} / {:.1} mm, {:.2} / {:.2}° | {:.2} ms | {:.2} | {:.3} | {:.3} / {:.3} | {} | {} | {} |\n",
             r.set,
             r.pairs,
             r.matcher,
@@ -439,6 +643,7 @@ pub fn table(rows: &[Row]) -> String {
             r.flag_recall,
             r.disputed,
             r.agreed,
+            closure_cell(r.closure),
         ));
     }
     out
@@ -491,7 +696,9 @@ pub fn standard_sets(root: &Path, n: usize, seed: u64) -> Result<Vec<CaseSet>, C
     }
     let mut pooled = CaseSet {
         name: "real, guess σ 20 cm / 10°".to_string(),
+        seed,
         cases: Vec::new(),
+        triangles: Vec::new(),
         tolerance_m: 0.10,
         tolerance_rad: 2f64.to_radians(),
     };
@@ -503,6 +710,14 @@ pub fn standard_sets(root: &Path, n: usize, seed: u64) -> Result<Vec<CaseSet>, C
             large,
             seed,
         )?;
+        let offset = pooled.cases.len();
+        pooled
+            .triangles
+            .extend(set.triangles.into_iter().map(|t| Triangle {
+                first: t.first + offset,
+                second: t.second + offset,
+                ..t
+            }));
         pooled.cases.extend(set.cases);
     }
     sets.push(pooled);
@@ -513,16 +728,7 @@ pub fn standard_sets(root: &Path, n: usize, seed: u64) -> Result<Vec<CaseSet>, C
 /// / 2° off (`real, NAME`) and σ 20 cm / 10° off (`real, NAME, guess σ 20 cm / 10°`), `n` pairs
 /// each; NAME is the file's name without `.gz`, `.log` or `.clf` and `-corrected`.
 pub fn extra_log_sets(path: &Path, n: usize, seed: u64) -> Result<[CaseSet; 2], CommandError> {
-    let file = path
-        .file_name()
-        .map(|f| f.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let stem = file.strip_suffix(".gz").unwrap_or(&file);
-    let stem = [".log", ".clf"]
-        .iter()
-        .find_map(|ext| stem.strip_suffix(ext))
-        .unwrap_or(stem);
-    let name = stem.strip_suffix("-corrected").unwrap_or(stem);
+    let name = log_name(path);
     let small = log_set(&format!("real, {name}"), path, n, SMALL_GUESS, seed)?;
     if small.cases.is_empty() {
         return Err(CommandError::option(
@@ -539,6 +745,112 @@ pub fn extra_log_sets(path: &Path, n: usize, seed: u64) -> Result<[CaseSet; 2], 
         seed,
     )?;
     Ok([small, large])
+}
+
+/// The row of a log without a reference given with `--raw-log` (`raw, NAME`): its first `n`
+/// consecutive pairs and their triangles, each guess the log's own relative pose (its
+/// odometry), as a map builder would start. Its `truth` is that guess too, so of its row only
+/// the flag, the time and the closure mean something ([`raw_table`]); its seed is 0, as its
+/// guesses draw nothing.
+pub fn raw_log_set(path: &Path, n: usize) -> Result<CaseSet, CommandError> {
+    let exact = GuessError {
+        sigma_m: 0.0,
+        sigma_rad: 0.0,
+    };
+    let set = log_set(&format!("raw, {}", log_name(path)), path, n, exact, 0)?;
+    if set.triangles.is_empty() {
+        return Err(CommandError::option(
+            "--raw-log",
+            "must hold at least three scans with poses",
+            path.display(),
+        ));
+    }
+    Ok(set)
+}
+
+/// A log's name in a row: its file's name without `.gz`, `.log` or `.clf` and `-corrected`.
+fn log_name(path: &Path) -> String {
+    let file = path
+        .file_name()
+        .map(|f| f.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let stem = file.strip_suffix(".gz").unwrap_or(&file);
+    let stem = [".log", ".clf"]
+        .iter()
+        .find_map(|ext| stem.strip_suffix(ext))
+        .unwrap_or(stem);
+    stem.strip_suffix("-corrected").unwrap_or(stem).to_string()
+}
+
+/// What a row of a log without a reference can say: how often the matcher trusted its answer,
+/// how long it took, and how well its answers chain.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct RawRow {
+    /// The set's name.
+    pub set: String,
+    /// The matcher.
+    pub matcher: MatcherKind,
+    /// Pairs matched.
+    pub pairs: usize,
+    /// Share of pairs flagged `converged`.
+    pub flagged: f64,
+    /// Median time per pair (preparing the reference included), microseconds.
+    pub median_us: f64,
+    /// The closure over the log's triangles.
+    pub closure: Option<Closure>,
+}
+
+impl From<&Row> for RawRow {
+    fn from(row: &Row) -> Self {
+        RawRow {
+            set: row.set.clone(),
+            matcher: row.matcher,
+            pairs: row.pairs,
+            flagged: row.flagged,
+            median_us: row.median_us,
+            closure: row.closure,
+        }
+    }
+}
+
+/// The rows of logs without a reference as a Markdown table: the flagged share, the time (with
+/// its ratio to the first matcher's on the same pairs) and the closure.
+pub fn raw_table(rows: &[RawRow]) -> String {
+    let mut out = String::from(
+        "| pairs without a reference | matcher | flagged | median time | × first | closure median / p95 |\n|---|---|---|---|---|---|\n",
+    );
+    let mut first_us = f64::NAN;
+    let mut last_set = "";
+    for r in rows {
+        if r.set != last_set {
+            first_us = r.median_us;
+            last_set = &r.set;
+        }
+        out.push_str(&format!(
+            "| {} ({}) | {} | {:.3} | {:.2} ms | {:.2} | {} |\n",
+            r.set,
+            r.pairs,
+            r.matcher,
+            r.flagged,
+            r.median_us / 1e3,
+            r.median_us / first_us,
+            closure_cell(r.closure),
+        ));
+    }
+    out
+}
+
+/// A table's closure cell: median / p95 in millimetres and degrees, or a dash.
+fn closure_cell(closure: Option<Closure>) -> String {
+    closure.map_or("—".to_string(), |c| {
+        format!(
+            "{:.1} / {:.1} mm, {:.2} / {:.2}°",
+            c.m[0] * 1e3,
+            c.m[1] * 1e3,
+            c.rad[0].to_degrees(),
+            c.rad[1].to_degrees()
+        )
+    })
 }
 
 /// The guesses of the synthetic rows and of the logs' own rows: σ 5 cm and 2° off the truth.
@@ -562,6 +874,10 @@ pub struct MatchersArgs {
     /// Seed of the pairs and guesses.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// How many seeds, from `--seed` on: each row pools its pairs of every seed (the rows of
+    /// `--raw-log`, whose guesses are the log's own, are matched once).
+    #[arg(long, default_value_t = 1)]
+    pub seeds: u64,
     /// Matchers to compare (comma-separated); all by default.
     #[arg(long, value_delimiter = ',')]
     pub matchers: Vec<MatcherKind>,
@@ -573,8 +889,15 @@ pub struct MatchersArgs {
     /// The standard rows stay as they are.
     #[arg(long, value_name = "PATH")]
     pub log: Vec<PathBuf>,
-    /// Write `matchers.json` (every row's figures) and `pairs.csv` (every match: errors, flag,
-    /// quality figures) into this folder too.
+    /// Also a row of this log without a reference (repeatable), such as a CARMEN log whose
+    /// poses are raw odometry (`tests/data/mit-csail.clf`): its consecutive pairs from the
+    /// odometry's guesses, in a table of its own with what needs no truth: the flagged share,
+    /// the time and the closure over three scans in a row.
+    #[arg(long, value_name = "PATH")]
+    pub raw_log: Vec<PathBuf>,
+    /// Write `matchers.json` (every row's figures), `pairs.csv` (every match: errors, flag,
+    /// quality figures), `closures.csv` (every log triangle's closure) and, with `--raw-log`,
+    /// `raw-logs.json` (those rows' figures) into this folder too.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Draw one pair into `--out` as `pair-SET-PAIR.svg`: the reference scan, and the current
@@ -668,10 +991,26 @@ pub fn main(args: MatchersArgs) -> Result<(), CommandError> {
     } else {
         args.matchers.clone()
     };
-    let mut sets = standard_sets(&args.root, args.pairs, args.seed)?;
-    for path in &args.log {
-        sets.extend(extra_log_sets(path, args.pairs, args.seed)?);
+    if args.seeds == 0 || args.seeds > 1000 {
+        return Err(CommandError::option(
+            "--seeds",
+            "must be between 1 and 1000",
+            args.seeds,
+        ));
     }
+    let seed_sets = |seed: u64| -> Result<Vec<CaseSet>, CommandError> {
+        let mut sets = standard_sets(&args.root, args.pairs, seed)?;
+        for path in &args.log {
+            sets.extend(extra_log_sets(path, args.pairs, seed)?);
+        }
+        Ok(sets)
+    };
+    let sets = seed_sets(args.seed)?;
+    let raw_sets = args
+        .raw_log
+        .iter()
+        .map(|path| raw_log_set(path, args.pairs))
+        .collect::<Result<Vec<_>, _>>()?;
     if let Some(spec) = &args.show {
         let dir = args.out.as_ref().ok_or_else(|| {
             CommandError::option("--show", "needs --out DIR to write the picture in", spec)
@@ -684,21 +1023,54 @@ pub fn main(args: MatchersArgs) -> Result<(), CommandError> {
         say!("{}", path.display());
         return Ok(());
     }
-    let total: usize = sets.iter().map(|s| s.cases.len() * kinds.len()).sum();
+    // Every seed's sets hold as many pairs as the first's.
+    let count = |sets: &[CaseSet]| -> usize {
+        sets.iter()
+            .map(|s| (s.cases.len() + s.triangles.len()) * kinds.len())
+            .sum()
+    };
+    let total = count(&sets) * args.seeds as usize + count(&raw_sets);
     let bar = super::bar(
         args.quiet,
         total as u64,
         "{spinner} matching [{bar:30}] {pos}/{len} pairs {rate} {eta}",
     );
-    let mut outcomes = Vec::with_capacity(total);
-    let mut rows: Vec<Row> = sets
+    let (mut outcomes, mut triangles) = (Vec::with_capacity(total), Vec::new());
+    let mut record = |matched| {
+        bar.inc(1);
+        match matched {
+            Matched::Pair(outcome) => outcomes.push(outcome),
+            Matched::Triangle(outcome) => triangles.push(outcome),
+        }
+    };
+    let mut pooled: Vec<Tally> = Vec::new();
+    let mut next = Some(sets);
+    for seed in args.seed..args.seed + args.seeds {
+        let sets = match next.take() {
+            Some(sets) => sets,
+            None => seed_sets(seed)?,
+        };
+        let tallies = sets.iter().flat_map(|set| tally(set, &kinds, &mut record));
+        if pooled.is_empty() {
+            pooled = tallies.collect();
+        } else {
+            for (pool, tally) in pooled.iter_mut().zip(tallies) {
+                pool.add(tally);
+            }
+        }
+    }
+    let mut rows: Vec<Row> = pooled.into_iter().map(Tally::row).collect();
+    let raw_rows: Vec<RawRow> = raw_sets
         .iter()
         .flat_map(|set| {
-            evaluate(set, &kinds, &mut |outcome| {
+            evaluate(set, &kinds, &mut |matched| {
                 bar.inc(1);
-                outcomes.push(outcome);
+                if let Matched::Triangle(outcome) = matched {
+                    triangles.push(outcome);
+                }
             })
         })
+        .map(|row| RawRow::from(&row))
         .collect();
     bar.finish_and_clear();
     mark_agreed(&mut outcomes, &mut rows);
@@ -706,6 +1078,9 @@ pub fn main(args: MatchersArgs) -> Result<(), CommandError> {
         .chain(outcomes.iter().map(Outcome::csv))
         .collect();
     say!("{}", table(&rows));
+    if !raw_rows.is_empty() {
+        say!("{}", raw_table(&raw_rows));
+    }
     if let Some(dir) = &args.out {
         let write = |source| CommandError::Write {
             dir: dir.clone(),
@@ -714,7 +1089,16 @@ pub fn main(args: MatchersArgs) -> Result<(), CommandError> {
         std::fs::create_dir_all(dir).map_err(write)?;
         let json = serde_json::to_string_pretty(&rows).expect("rows serialise");
         robot::logs::write_file(dir.join("matchers.json"), json + "\n").map_err(write)?;
+        if !raw_rows.is_empty() {
+            let json = serde_json::to_string_pretty(&raw_rows).expect("rows serialise");
+            robot::logs::write_file(dir.join("raw-logs.json"), json + "\n").map_err(write)?;
+        }
         robot::logs::write_file(dir.join("pairs.csv"), lines.join("\n") + "\n").map_err(write)?;
+        let closures: Vec<String> = std::iter::once(CLOSURES_HEADER.to_string())
+            .chain(triangles.iter().map(TriangleOutcome::csv))
+            .collect();
+        robot::logs::write_file(dir.join("closures.csv"), closures.join("\n") + "\n")
+            .map_err(write)?;
     }
     Ok(())
 }
@@ -729,6 +1113,7 @@ mod tests {
         let mut result = MatchResult::unmatched(pose);
         result.quality.inlier_share = share;
         Outcome {
+            seed: 1,
             set: "real".into(),
             pair,
             matcher,
@@ -756,7 +1141,25 @@ mod tests {
             flag_recall: 1.0,
             disputed: 0,
             agreed: 0,
+            closure: None,
         }
+    }
+
+    /// The closure is how far the skip pair's answer lies from the two pairs' answers chained:
+    /// none when they chain, and a skip answer moved by 3 cm sideways and 0.5° shows as that.
+    #[test]
+    fn the_closure_measures_how_far_the_answers_fail_to_chain() {
+        let (first, second) = (
+            Pose2::new(0.5, 0.1, 10f64.to_radians()),
+            Pose2::new(0.4, -0.2, -25f64.to_radians()),
+        );
+        let chained = first.compose(&second);
+        let (m, rad) = closure(&first, &second, &chained);
+        assert!(m < 1e-12 && rad < 1e-12, "{m} {rad}");
+        let off = chained.compose(&Pose2::new(0.0, 0.03, 0.5f64.to_radians()));
+        let (m, rad) = closure(&first, &second, &off);
+        assert!((m - 0.03).abs() < 1e-12, "{m}");
+        assert!((rad - 0.5f64.to_radians()).abs() < 1e-12, "{rad}");
     }
 
     /// A failure is agreed when another matcher's answer to the same pair lies within 3 cm and
@@ -797,6 +1200,7 @@ mod tests {
         // Its line in `pairs.csv` says so, with the answer.
         let line = outcomes[0].csv();
         assert!(line.ends_with(",1,0.10000,0.00000,0.0000"), "{line}");
+        assert!(line.starts_with("1,\"real\",0,"), "{line}");
         assert_eq!(line.split(',').count(), OUTCOMES_HEADER.split(',').count());
     }
 }
