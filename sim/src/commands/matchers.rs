@@ -619,13 +619,8 @@ pub fn table(rows: &[Row]) -> String {
     let mut out = String::from(
         "| pairs | matcher | success | median / p95 error | median time | × first | flagged | flag precision / recall | failures disputed | failures agreed | closure median / p95 |\n|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
-    let mut first_us = f64::NAN;
-    let mut last_set = "";
-    for r in rows {
-        if r.set != last_set {
-            first_us = r.median_us;
-            last_set = &r.set;
-        }
+    let ratios = ratios_to_first(rows.iter().map(|r| (r.set.as_str(), r.median_us)));
+    for (r, ratio) in rows.iter().zip(ratios) {
         out.push_str(&format!(
             "| {} ({}) | {} | {:.3} | {:.1} / {:.1} mm, {:.2} / {:.2}° | {:.2} ms | {:.2} | {:.3} | {:.3} / {:.3} | {} | {} | {} |\n",
             r.set,
@@ -637,7 +632,7 @@ pub fn table(rows: &[Row]) -> String {
             r.error_rad[0].to_degrees(),
             r.error_rad[1].to_degrees(),
             r.median_us / 1e3,
-            r.median_us / first_us,
+            ratio,
             r.flagged,
             r.flag_precision,
             r.flag_recall,
@@ -819,13 +814,8 @@ pub fn raw_table(rows: &[RawRow]) -> String {
     let mut out = String::from(
         "| pairs without a reference | matcher | flagged | median time | × first | closure median / p95 |\n|---|---|---|---|---|---|\n",
     );
-    let mut first_us = f64::NAN;
-    let mut last_set = "";
-    for r in rows {
-        if r.set != last_set {
-            first_us = r.median_us;
-            last_set = &r.set;
-        }
+    let ratios = ratios_to_first(rows.iter().map(|r| (r.set.as_str(), r.median_us)));
+    for (r, ratio) in rows.iter().zip(ratios) {
         out.push_str(&format!(
             "| {} ({}) | {} | {:.3} | {:.2} ms | {:.2} | {} |\n",
             r.set,
@@ -833,11 +823,24 @@ pub fn raw_table(rows: &[RawRow]) -> String {
             r.matcher,
             r.flagged,
             r.median_us / 1e3,
-            r.median_us / first_us,
+            ratio,
             closure_cell(r.closure),
         ));
     }
     out
+}
+
+/// Each time as a ratio to the first time of its set (a set's rows come one after another).
+fn ratios_to_first<'a>(times: impl Iterator<Item = (&'a str, f64)>) -> Vec<f64> {
+    let (mut first, mut last) = (f64::NAN, "");
+    times
+        .map(|(set, us)| {
+            if set != last {
+                (first, last) = (us, set);
+            }
+            us / first
+        })
+        .collect()
 }
 
 /// A table's closure cell: median / p95 in millimetres and degrees, or a dash.
