@@ -388,6 +388,9 @@ fn twin_matchers_pools_seeds_into_its_rows() {
     let (bad, ..) = run(&["--seeds", "0"], "bad");
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--seeds must be between 1 and 1000"));
+    let (past, ..) = run(&["--seed", "18446744073709551615", "--seeds", "2"], "past");
+    assert!(!past.status.success());
+    assert!(String::from_utf8_lossy(&past.stderr).contains("--seed + --seeds within 2^64"));
     let _ = std::fs::remove_dir_all(&out);
 }
 

@@ -1,9 +1,10 @@
 //! The matchers side by side on the same pairs, the table `twin matchers` prints: success,
 //! median and 95th-percentile errors, median time (with its ratio to `ls` on the same pairs in
 //! the same run, so it travels between machines) and the precision and recall of each answer's
-//! `converged` flag, and the closure of the logs' triangles — on synthetic pairs of the twin in four worlds at 0 % and 20 % outliers and
-//! on consecutive pairs of the three SLAM-corrected real logs, from guesses σ 5 cm / 2° off, and
-//! σ 20 cm / 10° in the last row. 100 pairs a row here; `twin matchers` gives 300.
+//! `converged` flag, and the closure of the logs' triangles — on synthetic pairs of the twin in
+//! four worlds at 0 % and 20 % outliers and on consecutive pairs of the three SLAM-corrected
+//! real logs, from guesses σ 5 cm / 2° off, and σ 20 cm / 10° in the last row. 100 pairs a row
+//! here; `twin matchers` gives 300.
 //!
 //! `cargo bench --bench matcher_table`
 

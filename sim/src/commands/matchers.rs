@@ -391,8 +391,8 @@ impl Outcome {
 }
 
 /// Marks each failure in `outcomes` that another matcher's answer to the same pair of the same
-/// set and seed lies within [`AGREE`] of, when both answers fit at least [`AGREE_MARGIN`] more of the
-/// current points than the reference pose; and counts them in the matching `rows`.
+/// set and seed lies within [`AGREE`] of, when both answers fit at least [`AGREE_MARGIN`] more
+/// of the current points than the reference pose; and counts them in the matching `rows`.
 pub fn mark_agreed(outcomes: &mut [Outcome], rows: &mut [Row]) {
     let mut by_pair: std::collections::BTreeMap<(&str, u64, usize), Vec<usize>> =
         Default::default();
@@ -994,13 +994,16 @@ pub fn main(args: MatchersArgs) -> Result<(), CommandError> {
     } else {
         args.matchers.clone()
     };
-    if args.seeds == 0 || args.seeds > 1000 {
-        return Err(CommandError::option(
-            "--seeds",
-            "must be between 1 and 1000",
-            args.seeds,
-        ));
-    }
+    let seeds = match args.seed.checked_add(args.seeds) {
+        Some(end) if (1..=1000).contains(&args.seeds) => args.seed..end,
+        _ => {
+            return Err(CommandError::option(
+                "--seeds",
+                "must be between 1 and 1000, and --seed + --seeds within 2^64",
+                args.seeds,
+            ));
+        }
+    };
     let seed_sets = |seed: u64| -> Result<Vec<CaseSet>, CommandError> {
         let mut sets = standard_sets(&args.root, args.pairs, seed)?;
         for path in &args.log {
@@ -1048,7 +1051,7 @@ pub fn main(args: MatchersArgs) -> Result<(), CommandError> {
     };
     let mut pooled: Vec<Tally> = Vec::new();
     let mut next = Some(sets);
-    for seed in args.seed..args.seed + args.seeds {
+    for seed in seeds {
         let sets = match next.take() {
             Some(sets) => sets,
             None => seed_sets(seed)?,
