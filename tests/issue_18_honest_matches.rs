@@ -295,12 +295,12 @@ fn twin_matchers_prints_the_table() {
     assert!(table.contains("flag precision / recall"), "{table}");
     assert_eq!(
         table.lines().filter(|l| l.contains("| lorentz |")).count(),
-        6
+        8
     );
     let csv = std::fs::read_to_string(out.join("pairs.csv")).unwrap();
-    // 4 pairs in each of five rows and 2 from each log in the pooled large-guess row, two
+    // 4 pairs in each of seven rows and 2 from each log in the pooled large-guess row, two
     // matchers.
-    assert_eq!(csv.lines().count(), 1 + 2 * (5 * 4 + 6), "{csv}");
+    assert_eq!(csv.lines().count(), 1 + 2 * (7 * 4 + 6), "{csv}");
     // The closure: a figure on each log's row, none on the synthetic ones; one line a matcher
     // for each triangle of three scans in a row (3 of each log's 4 pairs, 1 of each log's 2
     // in the pooled row).
@@ -375,7 +375,7 @@ fn twin_matchers_pools_seeds_into_its_rows() {
     );
     assert!(pairs.starts_with("seed,set,pair,") && body(&pairs)[0].starts_with("1,"));
     assert!(body(&pairs).last().unwrap().starts_with("2,"));
-    assert_eq!(rows.len(), 12);
+    assert_eq!(rows.len(), 16);
     for ((row, one), two) in rows.iter().zip(&one_rows).zip(&two_rows) {
         let pairs = |r: &serde_json::Value| r["pairs"].as_u64().unwrap();
         let right = |r: &serde_json::Value| r["success"].as_f64().unwrap() * pairs(r) as f64;
@@ -781,7 +781,7 @@ fn the_answer_before_the_last_pass_helps_sparse_scans() {
             tally(&mut counts, &set.name, a, b);
         }
     }
-    assert_eq!(counts.len(), 3, "{counts:?}");
+    assert_eq!(counts.len(), 5, "{counts:?}");
     for (name, a, b) in &counts {
         if name.contains("edmonton") {
             assert!(b > a, "{name}: {b} against {a}");
@@ -856,8 +856,9 @@ fn dense_scans_narrow_their_sigma_throughout() {
         for set in sets(300, seed) {
             let dense = beam_step(&set.cases[0].current.points())
                 .is_some_and(|step| step < 0.75f64.to_radians());
-            assert_eq!(dense, !set.name.contains("edmonton"), "{}", set.name);
-            let looked_at = set.name.starts_with("synthetic")
+            let sparse = set.name.contains("edmonton") || set.name.contains("1°");
+            assert_eq!(dense, !sparse, "{}", set.name);
+            let looked_at = set.name.starts_with("synthetic,")
                 || set.name.contains("belgioioso")
                 || set.name.contains("edmonton");
             if looked_at {
@@ -1147,14 +1148,18 @@ fn twin_matchers_shows_a_pair() {
 
 /// Two line-assisted Lorentzians side by side on every pair of `sets(150, seed)` for each of
 /// `seeds`, each pair's two answers handed to `visit`. Edmonton's sparse scans take neither
-/// matcher's dense-scan rules, so there the two must give the same answers.
+/// matcher's dense-scan rules, so there the two must give the same answers; the twin's 1°
+/// rows, as sparse, are left out.
 fn each_pair_side_by_side(
     matchers: [&robot::localization::Lorentz; 2],
     seeds: &[u64],
     mut visit: impl FnMut(&CaseSet, &matchers::Case, [&robot::localization::MatchResult; 2]),
 ) {
     for &seed in seeds {
-        for set in sets(150, seed) {
+        for set in sets(150, seed)
+            .into_iter()
+            .filter(|s| !s.name.contains("1°"))
+        {
             for c in &set.cases {
                 let [a, b] = matchers.map(|m| m.match_scans(&c.reference, &c.current, c.guess));
                 if set.name.contains("edmonton") {
@@ -1180,7 +1185,7 @@ fn rows_side_by_side(
             searches[k].push(r.iterations);
         }
     });
-    assert_eq!(rows.len(), 6, "every row of the table");
+    assert_eq!(rows.len(), 6, "every row of the table but the 1° ones");
     rows.into_iter()
         .map(|(name, (right, mut searches))| {
             let medians = searches.each_mut().map(|v| {
@@ -1535,7 +1540,7 @@ fn a_polish_that_still_turns_goes_on() {
             heading[k] += c.truth.relative(&r.pose).theta.abs().to_degrees();
         }
     });
-    assert_eq!(rows.len(), 6, "every row of the table");
+    assert_eq!(rows.len(), 6, "every row of the table but the 1° ones");
     for (name, (right, heading, changed)) in &rows {
         println!("{name}: right {right:?}, heading errors summed {heading:?}°, {changed} changed");
         assert!(right[1] + 1 >= right[0], "{name}: right {right:?}");
@@ -1576,7 +1581,7 @@ fn a_dense_first_pass_stops_sooner() {
             errors[k] += off.x.hypot(off.y);
         }
     });
-    assert_eq!(rows.len(), 6, "every row of the table");
+    assert_eq!(rows.len(), 6, "every row of the table but the 1° ones");
     for (name, (right, searches, errors)) in &rows {
         println!("{name}: right {right:?}, searches {searches:?}, errors summed {errors:?} m");
         assert!(right[1] + 1 >= right[0], "{name}: right {right:?}");
@@ -1648,18 +1653,24 @@ fn an_odometry_glitch_does_not_hold_the_answer() {
 #[test]
 fn a_point_to_line_finish_steadies_sparse_answers() {
     use robot::localization::{Lorentz, PointToLine, SPARSE_FINISH};
-    let without = Lorentz {
-        sparse_finish: None,
+    // The last pass converges as it would unfinished, so the iterations added are the finish's
+    // (`the_finished_pass_stops_sooner`, below, tests its own stop).
+    let unhurried = Lorentz {
+        finished_pass_convergence: None,
         ..Lorentz::with_lines()
     };
-    let with = Lorentz::with_lines();
+    let without = Lorentz {
+        sparse_finish: None,
+        ..unhurried.clone()
+    };
+    let with = unhurried.clone();
     assert_eq!(with.sparse_finish, Some(SPARSE_FINISH));
     let cycling = Lorentz {
         sparse_finish: Some(PointToLine {
             stop_on_cycles: None,
             ..SPARSE_FINISH
         }),
-        ..Lorentz::with_lines()
+        ..unhurried
     };
     let matchers = [&without, &with, &cycling];
     // Each Edmonton pair's answers from every seed, without and with.
@@ -1683,7 +1694,8 @@ fn a_point_to_line_finish_steadies_sparse_answers() {
                     finishing[0] += u64::from(finished.iterations - unfinished.iterations);
                     finishing[1] += u64::from(cycled.iterations - unfinished.iterations);
                 }
-            } else if seed == 21 && !set.name.starts_with("real, guess") {
+            } else if seed == 21 && !set.name.starts_with("real, guess") && !set.name.contains("1°")
+            {
                 for c in set.cases.iter().take(50) {
                     let [a, b] =
                         [&without, &with].map(|m| m.match_scans(&c.reference, &c.current, c.guess));
@@ -1722,4 +1734,56 @@ fn a_point_to_line_finish_steadies_sparse_answers() {
         2 * finishing[0] < finishing[1],
         "the finish's iterations: {finishing:?}"
     );
+}
+
+/// On sparse scans the last σ pass stops at 3 mm and 0.03° (`FINISHED_PASS_CONVERGENCE`), not
+/// 0.01 mm, and the point-to-line finish places the answer from there. On seeds held out from
+/// the twenty it was chosen on (31 and 32: Edmonton's pairs, the twin's 1° pairs with and
+/// without outliers, 150 each): at least a fifth fewer correspondence searches, and no fewer
+/// right answers on Edmonton (where the long last pass slid along the walls its 1° beams hold
+/// loosely), at most one fewer on the synthetic pairs; the dense scans do not change.
+#[test]
+fn the_finished_pass_stops_sooner() {
+    use robot::localization::{FINISHED_PASS_CONVERGENCE, Lorentz};
+    let sooner = Lorentz::with_lines();
+    assert_eq!(
+        sooner.finished_pass_convergence,
+        Some(FINISHED_PASS_CONVERGENCE)
+    );
+    let longer = Lorentz {
+        finished_pass_convergence: None,
+        ..Lorentz::with_lines()
+    };
+    // Right answers and searches, longer then sooner, for Edmonton and the synthetic 1° rows.
+    let (mut right, mut searches) = ([[0usize; 2]; 2], [0u64; 2]);
+    for seed in [31, 32] {
+        for set in sets(150, seed) {
+            let sparse = set.name.contains("edmonton") || set.name.contains("1°");
+            let dense = set.name.starts_with("synthetic,") || set.name.contains("belgioioso");
+            for c in set.cases.iter().take(if sparse { 150 } else { 20 }) {
+                let [a, b] =
+                    [&longer, &sooner].map(|m| m.match_scans(&c.reference, &c.current, c.guess));
+                if dense {
+                    assert_eq!(a, b, "{}: dense scans stop as before", set.name);
+                } else if sparse {
+                    let row = usize::from(!set.name.contains("edmonton"));
+                    for (m, r) in [&a, &b].into_iter().enumerate() {
+                        right[row][m] += usize::from(is_right(&set, c, r));
+                        searches[m] += u64::from(r.iterations);
+                    }
+                }
+            }
+        }
+    }
+    println!(
+        "right answers [longer, sooner]: Edmonton {:?}, synthetic 1° {:?}; searches {searches:?}",
+        right[0], right[1]
+    );
+    assert!(right[0][1] >= right[0][0], "Edmonton: {:?}", right[0]);
+    assert!(
+        right[1][1] + 1 >= right[1][0],
+        "synthetic 1°: {:?}",
+        right[1]
+    );
+    assert!(5 * searches[1] <= 4 * searches[0], "searches: {searches:?}");
 }

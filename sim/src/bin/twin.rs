@@ -70,8 +70,8 @@ enum Command {
     /// for a malformed line.
     Match(commands::map::MatchArgs),
     /// Compare the scan matchers on the same pairs — the twin's in four worlds at 0 % and 20 %
-    /// outliers, and the SLAM-corrected real logs — and print success, errors, time and how
-    /// well each answer's `converged` flag predicts success.
+    /// outliers, its SICK's beams 0.5° and 1° apart, and the SLAM-corrected real logs — and
+    /// print success, errors, time and how well each answer's `converged` flag predicts success.
     Matchers(commands::matchers::MatchersArgs),
     /// Write a finished run's consecutive level scans as the pairs `twin match` reads (JSON
     /// Lines on stdout, the guess from odometry): `twin pairs out/lab-tour > pairs.jsonl`.

@@ -4,8 +4,9 @@
 //!
 //! - **synthetic** pairs: the twin's SICK from two poses a short drive apart (up to ±30 cm and
 //!   ±20°) in four worlds in turn (the lab, the orthogonal room, the glass-door room and the lab
-//!   with 30 boxes), at 0 % and 20 % uniform outliers; the guess is the truth moved by Gaussian errors
-//!   of σ 5 cm and 2°; success is within 5 cm and 1°;
+//!   with 30 boxes), at 0 % and 20 % uniform outliers, with its beams 0.5° apart and in its 1°
+//!   mode ([`SPARSE_BEAMS`]); the guess is the truth moved by Gaussian errors of σ 5 cm and 2°;
+//!   success is within 5 cm and 1°;
 //! - **real** pairs: consecutive scans of the SLAM-corrected CARMEN logs in
 //!   `tests/data/corrected/` (Belgioioso castle, Freiburg building 101, Edmonton convention
 //!   centre), whose corrected poses give the truth to about 2 cm; the guess is the truth moved by
@@ -644,8 +645,14 @@ pub fn table(rows: &[Row]) -> String {
     out
 }
 
-/// The standard sets: synthetic at 0 % and 20 % outliers, each corrected log, and the large
-/// guess over the three logs; `n` pairs each (a log gives at most its scans less one).
+/// The beams of the synthetic rows' sparse scans: the LMS in its 1° mode, 181 over 180°, as
+/// sparse as the 180 readings of the Edmonton log (and of the Intel lab's, which the issue's
+/// campaign used), but with the twin's exact truth.
+pub const SPARSE_BEAMS: u16 = 181;
+
+/// The standard sets: synthetic at 0 % and 20 % outliers, with the robot's LMS at 0.5° and in
+/// its 1° mode ([`SPARSE_BEAMS`]), each corrected log, and the large guess over the three
+/// logs; `n` pairs each (a log gives at most its scans less one).
 pub fn standard_sets(root: &Path, n: usize, seed: u64) -> Result<Vec<CaseSet>, CommandError> {
     if !root.join("worlds").is_dir() || !root.join("tests/data/corrected").is_dir() {
         return Err(CommandError::option(
@@ -676,9 +683,14 @@ pub fn standard_sets(root: &Path, n: usize, seed: u64) -> Result<Vec<CaseSet>, C
     let log = |name: &str| -> PathBuf {
         root.join(format!("tests/data/corrected/{name}-corrected.log.gz"))
     };
+    // The same laser in its 1° mode: sparse scans, as the Edmonton log's, with exact truth.
+    let mut sparse = robot.clone();
+    sparse.laser.beams = SPARSE_BEAMS;
     let mut sets = vec![
         synthetic_set("synthetic, 0 %", &worlds, &robot, 0.0, n, small, seed)?,
         synthetic_set("synthetic, 20 %", &worlds, &robot, 0.2, n, small, seed)?,
+        synthetic_set("synthetic 1°, 0 %", &worlds, &sparse, 0.0, n, small, seed)?,
+        synthetic_set("synthetic 1°, 20 %", &worlds, &sparse, 0.2, n, small, seed)?,
     ];
     for name in logs {
         sets.push(log_set(
