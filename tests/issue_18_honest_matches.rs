@@ -757,9 +757,12 @@ fn a_wide_second_schedule_rescues_large_guesses() {
 
 /// The line-assisted Lorentzian also polishes its answer from before the last σ pass (5 mm)
 /// and keeps it when it fits clearly more points: on Edmonton's sparse 1° scans it is right
-/// more often than without, over two seeds of 300 pairs a row (the scan pairs it rescues are
-/// the same from seed to seed, most of them past the log's 150th), and the synthetic rows lose
-/// at most one pair of the 600.
+/// no less often than without, over two seeds of 300 pairs a row, and the synthetic rows lose
+/// at most one pair of the 600. It was right more often on these seeds (the scan pairs it
+/// rescued were the same from seed to seed, most of them past the log's 150th) until sparse
+/// scans took point-to-line residuals (`SPARSE_LINE_RESIDUALS_SPREAD`), which slide less far
+/// in the last pass; over seeds 1–20 of `twin matchers` it still gains Edmonton 5,813 → 5,816
+/// (+7 −4) and the twin's 1° pairs with outliers 5,967 → 5,968.
 #[test]
 fn the_answer_before_the_last_pass_helps_sparse_scans() {
     use robot::localization::Lorentz;
@@ -784,7 +787,7 @@ fn the_answer_before_the_last_pass_helps_sparse_scans() {
     assert_eq!(counts.len(), 5, "{counts:?}");
     for (name, a, b) in &counts {
         if name.contains("edmonton") {
-            assert!(b > a, "{name}: {b} against {a}");
+            assert!(b >= a, "{name}: {b} against {a}");
         } else {
             assert!(b + 1 >= *a, "{name}: {b} against {a}");
         }
@@ -1204,8 +1207,8 @@ fn rows_side_by_side(
 /// move in one search. Over two seeds held out from the twelve it was chosen on (13 and 14, 150
 /// pairs a row): on every dense row it is right as often (a pair either way allowed; none moved
 /// over seeds 1–12) for fewer correspondence searches, a quarter fewer or more on the synthetic
-/// pairs without outliers and Belgioioso; Edmonton's sparse 1° scans keep the product form,
-/// with the same answers to the last bit.
+/// pairs without outliers and Belgioioso; Edmonton's sparse 1° scans, which ask a share of
+/// their own (`SPARSE_LINE_RESIDUALS_SPREAD`), the same answers to the last bit.
 #[test]
 fn point_to_line_residuals_take_fewer_searches() {
     use robot::localization::Lorentz;
@@ -1739,9 +1742,11 @@ fn a_point_to_line_finish_steadies_sparse_answers() {
 /// On sparse scans the last σ pass stops at 3 mm and 0.03° (`FINISHED_PASS_CONVERGENCE`), not
 /// 0.01 mm, and the point-to-line finish places the answer from there. On seeds held out from
 /// the twenty it was chosen on (31 and 32: Edmonton's pairs, the twin's 1° pairs with and
-/// without outliers, 150 each): at least a fifth fewer correspondence searches, and no fewer
-/// right answers on Edmonton (where the long last pass slid along the walls its 1° beams hold
-/// loosely), at most one fewer on the synthetic pairs; the dense scans do not change.
+/// without outliers, 150 each): at least a sixth fewer correspondence searches (a fifth when it
+/// was chosen; since then point-to-line residuals, `SPARSE_LINE_RESIDUALS_SPREAD`, shortened
+/// the first pass), and no fewer right answers on Edmonton (where the long last pass slid along
+/// the walls its 1° beams hold loosely), at most one fewer on the synthetic pairs; the dense
+/// scans do not change.
 #[test]
 fn the_finished_pass_stops_sooner() {
     use robot::localization::{FINISHED_PASS_CONVERGENCE, Lorentz};
@@ -1754,36 +1759,88 @@ fn the_finished_pass_stops_sooner() {
         finished_pass_convergence: None,
         ..Lorentz::with_lines()
     };
-    // Right answers and searches, longer then sooner, for Edmonton and the synthetic 1° rows.
-    let (mut right, mut searches) = ([[0usize; 2]; 2], [0u64; 2]);
-    for seed in [31, 32] {
+    let rows = sparse_rows_side_by_side([&longer, &sooner], [31, 32]);
+    let (mut synthetic, mut searches) = ([0usize; 2], [0u64; 2]);
+    for (name, (right, s)) in &rows {
+        if name.contains("1°") {
+            synthetic = [synthetic[0] + right[0], synthetic[1] + right[1]];
+        }
+        searches = [searches[0] + s[0], searches[1] + s[1]];
+    }
+    let edmonton = rows["real, edmonton"].0;
+    println!(
+        "right answers [longer, sooner]: Edmonton {edmonton:?}, synthetic 1° {synthetic:?}; \
+         searches {searches:?}"
+    );
+    assert!(edmonton[1] >= edmonton[0], "Edmonton: {edmonton:?}");
+    assert!(
+        synthetic[1] + 1 >= synthetic[0],
+        "synthetic 1°: {synthetic:?}"
+    );
+    assert!(6 * searches[1] <= 5 * searches[0], "searches: {searches:?}");
+}
+
+/// Two sparse-scan matchers side by side on `seeds` (150 pairs a row): for Edmonton and the
+/// twin's two 1° rows, each matcher's right answers and correspondence searches; on the dense
+/// rows (the synthetic ones at 0.5°, Belgioioso; their first 20 pairs) the two must give the
+/// same answers, as they differ only in what sparse scans do.
+fn sparse_rows_side_by_side(
+    matchers: [&robot::localization::Lorentz; 2],
+    seeds: [u64; 2],
+) -> BTreeMap<String, ([usize; 2], [u64; 2])> {
+    let mut rows: BTreeMap<String, ([usize; 2], [u64; 2])> = BTreeMap::new();
+    for seed in seeds {
         for set in sets(150, seed) {
             let sparse = set.name.contains("edmonton") || set.name.contains("1°");
             let dense = set.name.starts_with("synthetic,") || set.name.contains("belgioioso");
             for c in set.cases.iter().take(if sparse { 150 } else { 20 }) {
-                let [a, b] =
-                    [&longer, &sooner].map(|m| m.match_scans(&c.reference, &c.current, c.guess));
+                let answers = matchers.map(|m| m.match_scans(&c.reference, &c.current, c.guess));
                 if dense {
-                    assert_eq!(a, b, "{}: dense scans stop as before", set.name);
+                    assert_eq!(
+                        answers[0], answers[1],
+                        "{}: dense scans as before",
+                        set.name
+                    );
                 } else if sparse {
-                    let row = usize::from(!set.name.contains("edmonton"));
-                    for (m, r) in [&a, &b].into_iter().enumerate() {
-                        right[row][m] += usize::from(is_right(&set, c, r));
+                    let (right, searches) = rows.entry(set.name.clone()).or_default();
+                    for (m, r) in answers.iter().enumerate() {
+                        right[m] += usize::from(is_right(&set, c, r));
                         searches[m] += u64::from(r.iterations);
                     }
                 }
             }
         }
     }
-    println!(
-        "right answers [longer, sooner]: Edmonton {:?}, synthetic 1° {:?}; searches {searches:?}",
-        right[0], right[1]
+    assert_eq!(rows.len(), 3, "Edmonton and the two 1° rows: {rows:?}");
+    rows
+}
+
+/// On sparse scans too, a search whose line normals spread (a fifth,
+/// `SPARSE_LINE_RESIDUALS_SPREAD`) counts a point projected inside a reference line by its
+/// distance to that line alone: the first σ pass no longer crawls along the walls a search at
+/// a time. On seeds held out from the twenty it was chosen on (33 and 34, 150 pairs a row):
+/// the twin's 1° pairs without outliers take at least a third fewer correspondence searches,
+/// Edmonton's fewer; no sparse row is right on more than two fewer pairs; the dense scans do
+/// not change.
+#[test]
+fn sparse_scans_slide_along_their_lines_too() {
+    use robot::localization::{Lorentz, SPARSE_LINE_RESIDUALS_SPREAD};
+    let to_lines = Lorentz::with_lines();
+    assert_eq!(
+        to_lines.sparse_line_residuals_spread,
+        Some(SPARSE_LINE_RESIDUALS_SPREAD)
     );
-    assert!(right[0][1] >= right[0][0], "Edmonton: {:?}", right[0]);
-    assert!(
-        right[1][1] + 1 >= right[1][0],
-        "synthetic 1°: {:?}",
-        right[1]
-    );
-    assert!(5 * searches[1] <= 4 * searches[0], "searches: {searches:?}");
+    let product = Lorentz {
+        sparse_line_residuals_spread: None,
+        ..Lorentz::with_lines()
+    };
+    let rows = sparse_rows_side_by_side([&product, &to_lines], [33, 34]);
+    for (name, (right, searches)) in &rows {
+        println!("{name}: right {right:?}, searches {searches:?}");
+        assert!(right[1] + 2 >= right[0], "{name}: right {right:?}");
+        assert!(searches[1] < searches[0], "{name}: searches {searches:?}");
+        if name.contains("1°, 0") {
+            assert!(3 * searches[1] <= 2 * searches[0], "{name}: {searches:?}");
+        }
+    }
 }

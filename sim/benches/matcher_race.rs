@@ -6,7 +6,8 @@
 //! one of them. Prints each row's median time a pair for both and their ratio. Each match
 //! prepares its reference, as in `twin matchers`.
 //!
-//! `cargo bench --bench matcher_race` (`RACE_ROUNDS`, default 5, sets the rounds)
+//! `cargo bench --bench matcher_race` (`RACE_ROUNDS`, default 5, sets the rounds; `RACE_ROW`,
+//! a part of a row's name such as `1°, 0`, races that row alone)
 
 use robot::localization::{MatcherKind, Reference};
 use sim::commands::matchers;
@@ -21,8 +22,16 @@ fn main() {
         .and_then(|v| v.parse().ok())
         .unwrap_or(5);
     let racers = [MatcherKind::LorentzLines, MatcherKind::PointToLine].map(|k| k.build());
+    // Only the rows whose names hold `RACE_ROW`, when set (to profile one row).
+    let only = std::env::var("RACE_ROW").ok();
     println!("| row | lorentz-lines | pl-icp | ratio |\n|---|---|---|---|");
     for set in &sets {
+        if only
+            .as_ref()
+            .is_some_and(|o| !set.name.contains(o.as_str()))
+        {
+            continue;
+        }
         let mut best = vec![[f64::INFINITY; 2]; set.cases.len()];
         for round in 0..rounds {
             for (pair, case) in set.cases.iter().enumerate() {

@@ -143,6 +143,13 @@ pub struct Lorentz {
     /// first match from the guess asks less of the spread. Not in the thesis; `None` (the
     /// default) leaves it out, and [`Lorentz::with_lines`] has [`LINE_RESIDUALS_SPREAD`].
     pub line_residuals_spread: Option<f64>,
+    /// For sparse scans (not dense, as `dense_sigmas_m`): as `line_residuals_spread`, the share
+    /// of the larger eigenvalue of the line normals' `Σ n nᵀ` the smaller must reach for a
+    /// search to count its line pairs' distances to their lines alone; restarts and the coarse
+    /// search's starts keep the product form there too. Not in the thesis; `None` (the
+    /// default) keeps the product form on sparse scans, and [`Lorentz::with_lines`] has
+    /// [`SPARSE_LINE_RESIDUALS_SPREAD`].
+    pub sparse_line_residuals_spread: Option<f64>,
     /// With `line_residuals_spread`: the share of the larger eigenvalue the smaller must reach
     /// in the first match from the guess, instead of `line_residuals_spread`'s. An answer of
     /// that match that fits loosely (under `wide_below` of the current points inliers: the
@@ -214,10 +221,28 @@ pub const DENSE_SIGMAS: [f64; 3] = [0.05, 0.02, 0.005];
 /// searches a pair fell from 57 to 35 (synthetic, 0 %), 54 to 40 (20 %), 63 to 30
 /// (Belgioioso), 66 to 60 (Freiburg 101) and 87 to 73 (large guesses), with the same right
 /// answers on every row. At a quarter the searches fell further (to 25, 32, 24, 44 and 60)
-/// but Belgioioso lost a pair; on sparse scans (Edmonton's 1° beams) it lost 3–5 pairs at each
-/// share tried (0.1, 0.25, 0.5), so they keep the product form. Since [`FIRST_SPREAD`], the
-/// first match from the guess asks a tenth.
+/// but Belgioioso lost a pair. Since [`FIRST_SPREAD`], the first match from the guess asks a
+/// tenth; sparse scans ask [`SPARSE_LINE_RESIDUALS_SPREAD`].
 pub const LINE_RESIDUALS_SPREAD: f64 = 0.5;
+
+/// How spread the line normals of a search of a sparse scan (Edmonton's 1° beams, the twin's
+/// SICK in its 1° mode) must be for [`Lorentz::with_lines`] to count its line pairs' distance
+/// to their lines alone ([`Lorentz::sparse_line_residuals_spread`]): a fifth. In the product
+/// form the first σ pass (2 cm) of a 1° scan crawled along the walls, a search at a time, each
+/// moving the estimate a little over half as far as the one before, and took half of a match's
+/// searches. Over seeds 1–20 of `twin matchers` (`lorentz-lines` alone, 6,000 pairs a row),
+/// against the product form: right answers 5,995 → 5,995 (synthetic 1°, 0 %), 5,970 → 5,968
+/// (1°, 20 %; +2 −4, the lost answers 1.0–3.7° off, fitting as many of the current points as
+/// the answers before or more), Edmonton 5,801 → 5,816 (+22 −7), the large guesses 5,909 →
+/// 5,909 (+2 −2); the dense rows the same answers to the bit. Correspondence searches a pair,
+/// mean: 40.0 → 22.4 (1°, 0 %), 36.7 → 26.5 (1°, 20 %), 66.2 → 61.3 (Edmonton). A tenth took
+/// fewer searches still (20.4 without outliers) but was right less often (Edmonton 5,807, 1°
+/// with outliers 5,967); 0.3 (seeds 1–10) as often as a fifth, for 24.5 searches against 22.4;
+/// a half, the dense scans' share, took more time than a tenth (`cargo bench --bench
+/// matcher_race`). Held out, seeds 21–30: the same right answers on every row (Edmonton 2,898,
+/// +8 −8; the 1° rows 2,993 and 2,990), searches 39.4 → 22.1 (1°, 0 %) and 65.7 → 60.9
+/// (Edmonton).
+pub const SPARSE_LINE_RESIDUALS_SPREAD: f64 = 0.2;
 
 /// How spread the line normals of a search of the first match from the guess must be for
 /// [`Lorentz::with_lines`] to count its line pairs' distance to their lines alone
@@ -546,6 +571,7 @@ impl Lorentz {
             dense_sigmas_m: DENSE_SIGMAS.to_vec(),
             dense_below_rad: SPARSE_BEAM_STEP_RAD,
             line_residuals_spread: Some(LINE_RESIDUALS_SPREAD),
+            sparse_line_residuals_spread: Some(SPARSE_LINE_RESIDUALS_SPREAD),
             first_spread: Some(FIRST_SPREAD),
             first_max_steps: Some(FIRST_STEPS),
             first_pass_enough: Some(FIRST_PASS_ENOUGH),
@@ -940,6 +966,7 @@ impl Default for Lorentz {
             dense_sigmas_m: Vec::new(),
             dense_below_rad: 0.0,
             line_residuals_spread: None,
+            sparse_line_residuals_spread: None,
             first_spread: None,
             first_max_steps: None,
             first_pass_enough: None,
@@ -991,8 +1018,12 @@ impl Lorentz {
         guess: Pose2,
         last: &mut [Option<LastNearest>],
     ) -> MatchResult {
-        let spread = self.line_residuals_spread.filter(|_| dense);
-        let first_spread = self.first_spread.filter(|_| spread.is_some());
+        let spread = if dense {
+            self.line_residuals_spread
+        } else {
+            self.sparse_line_residuals_spread
+        };
+        let first_spread = self.first_spread.filter(|_| dense && spread.is_some());
         let mut lines = self.lines.as_ref().map(|params| Assist {
             lines: lines_of(&reference.points.xy, params),
             margin: params.end_margin_m,
