@@ -24,14 +24,20 @@ fn main() {
     let racers = [MatcherKind::LorentzLines, MatcherKind::PointToLine].map(|k| k.build());
     // Only the rows whose names hold `RACE_ROW`, when set (to profile one row).
     let only = std::env::var("RACE_ROW").ok();
+    let raced: Vec<_> = sets
+        .iter()
+        .filter(|s| only.as_deref().is_none_or(|o| s.name.contains(o)))
+        .collect();
+    if raced.is_empty() {
+        let names: Vec<&str> = sets.iter().map(|s| s.name.as_str()).collect();
+        eprintln!(
+            "RACE_ROW={:?} is part of no row's name: {names:?}",
+            only.as_deref().unwrap_or_default()
+        );
+        std::process::exit(2);
+    }
     println!("| row | lorentz-lines | pl-icp | ratio |\n|---|---|---|---|");
-    for set in &sets {
-        if only
-            .as_ref()
-            .is_some_and(|o| !set.name.contains(o.as_str()))
-        {
-            continue;
-        }
+    for set in raced {
         let mut best = vec![[f64::INFINITY; 2]; set.cases.len()];
         for round in 0..rounds {
             for (pair, case) in set.cases.iter().enumerate() {

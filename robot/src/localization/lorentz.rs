@@ -1047,9 +1047,10 @@ impl Lorentz {
             return first;
         }
         let rule = TrustRule::default();
-        // From here on every match asks `line_residuals_spread` of the spread. A loose first
-        // answer is matched again so, and that answer is kept unless the first fits clearly
-        // more points.
+        // From here on every match asks the scan's own share of the spread
+        // (`line_residuals_spread`, or `sparse_line_residuals_spread` on a sparse scan). A loose
+        // first answer is matched again so, and that answer is kept unless the first fits
+        // clearly more points.
         if let Some(assist) = &mut lines {
             assist.spread = spread;
         }
