@@ -755,41 +755,74 @@ fn a_wide_second_schedule_rescues_large_guesses() {
     );
 }
 
-/// The line-assisted Lorentzian also polishes its answer from before the last σ pass (5 mm)
-/// and keeps it when it fits clearly more points: on Edmonton's sparse 1° scans it is right
-/// no less often than without, over two seeds of 300 pairs a row, and the synthetic rows lose
-/// at most one pair of the 600. It was right more often on these seeds (the scan pairs it
-/// rescued were the same from seed to seed, most of them past the log's 150th) until sparse
-/// scans took point-to-line residuals (`SPARSE_LINE_RESIDUALS_SPREAD`), which slide less far
-/// in the last pass; over seeds 1–20 of `twin matchers` it still gains Edmonton 5,813 → 5,816
-/// (+7 −4) and the twin's 1° pairs with outliers 5,967 → 5,968.
+/// The line-assisted Lorentzian also polishes its answer from before the last σ pass and keeps
+/// it when it fits clearly more points (`before_last_margin`), but only in the wide schedule:
+/// a sparse scan's first schedule ends with the point-to-line finish, which places the answer
+/// (it had run there too, for Edmonton's 1° scans, until the finish came). On seeds held out
+/// from those it was measured on (37 and 38, 150 pairs a row), with and without it: the sparse
+/// rows give the same answer on at least nine pairs in ten (the others ran the wide schedule)
+/// and are right on as many pairs, give or take one.
 #[test]
-fn the_answer_before_the_last_pass_helps_sparse_scans() {
+fn the_second_polish_is_left_to_the_wide_schedule() {
     use robot::localization::Lorentz;
-    let last_only = Lorentz {
+    let without = Lorentz {
         before_last_margin: None,
         ..Lorentz::with_lines()
     };
-    let both = Lorentz::with_lines();
-    assert!(both.before_last_margin.is_some());
-    // Right answers, without and with, summed over the seeds, for each row looked at.
-    let mut counts: Vec<(String, usize, usize)> = Vec::new();
-    for seed in [7, 8] {
-        let sets = sets(300, seed);
-        let looked_at = sets
-            .iter()
-            .filter(|s| s.name.starts_with("synthetic") || s.name.contains("edmonton"));
-        for set in looked_at {
-            let (a, b) = (right_answers(set, &last_only), right_answers(set, &both));
-            tally(&mut counts, &set.name, a, b);
+    let with = Lorentz::with_lines();
+    assert!(with.before_last_margin.is_some());
+    // Per sparse row: right answers without and with, pairs matched, answers the same.
+    let mut rows: BTreeMap<String, ([usize; 2], usize, usize)> = BTreeMap::new();
+    for seed in [37, 38] {
+        for set in sets(150, seed) {
+            if !(set.name.contains("edmonton") || set.name.contains("1°")) {
+                continue;
+            }
+            let (right, pairs, same) = rows.entry(set.name.clone()).or_default();
+            for c in &set.cases {
+                let a = without.match_scans(&c.reference, &c.current, c.guess);
+                let b = with.match_scans(&c.reference, &c.current, c.guess);
+                right[0] += usize::from(is_right(&set, c, &a));
+                right[1] += usize::from(is_right(&set, c, &b));
+                *pairs += 1;
+                *same += usize::from(a.pose == b.pose);
+            }
         }
     }
-    assert_eq!(counts.len(), 5, "{counts:?}");
-    for (name, a, b) in &counts {
-        if name.contains("edmonton") {
-            assert!(b >= a, "{name}: {b} against {a}");
-        } else {
-            assert!(b + 1 >= *a, "{name}: {b} against {a}");
+    assert_eq!(rows.len(), 3, "Edmonton and the two 1° rows: {rows:?}");
+    for (name, (right, pairs, same)) in &rows {
+        println!("{name}: right {right:?}, the same answer on {same} of {pairs}");
+        assert!(10 * same >= 9 * pairs, "{name}: {same} of {pairs} the same");
+        assert!(right[1] + 1 >= right[0], "{name}: {right:?}");
+        assert!(right[0] + 1 >= right[1], "{name}: {right:?}");
+    }
+}
+
+/// On sparse scans the passes before the last stop when a search moves the estimate by under
+/// 0.3 mm and 0.003° (`SPARSE_EARLY_CONVERGENCE`), not 0.1 mm and 0.001°: the last pass and the
+/// finish take the answer on. On seeds held out from those it was chosen on (35 and 36, 150
+/// pairs a row): fewer correspondence searches on every sparse row, a twentieth fewer on the
+/// twin's 1° pairs without outliers, and at most one right answer fewer on any; the dense
+/// scans do not change.
+#[test]
+fn sparse_passes_before_the_last_stop_sooner() {
+    use robot::localization::{Lorentz, SPARSE_EARLY_CONVERGENCE};
+    let sooner = Lorentz::with_lines();
+    assert_eq!(
+        sooner.sparse_early_convergence,
+        Some(SPARSE_EARLY_CONVERGENCE)
+    );
+    let longer = Lorentz {
+        sparse_early_convergence: None,
+        ..Lorentz::with_lines()
+    };
+    let rows = sparse_rows_side_by_side([&longer, &sooner], [35, 36]);
+    for (name, (right, searches)) in &rows {
+        println!("{name}: right {right:?}, searches {searches:?}");
+        assert!(right[1] + 1 >= right[0], "{name}: right {right:?}");
+        assert!(searches[1] < searches[0], "{name}: searches {searches:?}");
+        if name.contains("1°, 0") {
+            assert!(20 * searches[1] <= 19 * searches[0], "{name}: {searches:?}");
         }
     }
 }
@@ -1652,10 +1685,11 @@ fn an_odometry_glitch_does_not_hold_the_answer() {
 /// fewer are right; the dense scans do not run it, with the same answers to the last bit.
 /// The finish stops when its pairings come round in a cycle (`stop_on_cycles`): the same right
 /// answers for under half the finish's iterations (without, a quarter of the finishes ran to
-/// the cap of 100).
+/// the cap of 100), counted against a finish of no iterations (a matcher without the finish
+/// also runs its passes otherwise: `sparse_early_convergence`, `before_last_margin`).
 #[test]
 fn a_point_to_line_finish_steadies_sparse_answers() {
-    use robot::localization::{Lorentz, PointToLine, SPARSE_FINISH};
+    use robot::localization::{Convergence, Lorentz, PointToLine, SPARSE_FINISH};
     // The last pass converges as it would unfinished, so the iterations added are the finish's
     // (`the_finished_pass_stops_sooner`, below, tests its own stop).
     let unhurried = Lorentz {
@@ -1673,9 +1707,21 @@ fn a_point_to_line_finish_steadies_sparse_answers() {
             stop_on_cycles: None,
             ..SPARSE_FINISH
         }),
+        ..unhurried.clone()
+    };
+    // A finish of no iterations: the σ passes of `with` (which, followed by a finish, differ
+    // from `without`'s), whose iterations the others' less are their finishes'.
+    let idle = Lorentz {
+        sparse_finish: Some(PointToLine {
+            convergence: Convergence {
+                max_iterations: 0,
+                ..SPARSE_FINISH.convergence
+            },
+            ..SPARSE_FINISH
+        }),
         ..unhurried
     };
-    let matchers = [&without, &with, &cycling];
+    let matchers = [&without, &with, &cycling, &idle];
     // Each Edmonton pair's answers from every seed, without and with.
     let mut answers: BTreeMap<usize, [Vec<Pose2>; 2]> = BTreeMap::new();
     let mut right = [0usize; 3];
@@ -1687,15 +1733,15 @@ fn a_point_to_line_finish_steadies_sparse_answers() {
                 for (k, c) in set.cases.iter().enumerate() {
                     let results =
                         matchers.map(|m| m.match_scans(&c.reference, &c.current, c.guess));
-                    for (m, r) in results.iter().enumerate() {
+                    for (m, r) in results.iter().take(3).enumerate() {
                         right[m] += usize::from(is_right(&set, c, r));
                     }
-                    let [unfinished, finished, cycled] = &results;
+                    let [unfinished, finished, cycled, passes] = &results;
                     let entry = answers.entry(k).or_default();
                     entry[0].push(unfinished.pose);
                     entry[1].push(finished.pose);
-                    finishing[0] += u64::from(finished.iterations - unfinished.iterations);
-                    finishing[1] += u64::from(cycled.iterations - unfinished.iterations);
+                    finishing[0] += u64::from(finished.iterations - passes.iterations);
+                    finishing[1] += u64::from(cycled.iterations - passes.iterations);
                 }
             } else if seed == 21 && !set.name.starts_with("real, guess") && !set.name.contains("1°")
             {

@@ -90,9 +90,14 @@ pub struct Lorentz {
     /// aside, and over 2,400 pairs (`twin matchers`, seeds 1–6, 11, 12) keeping the earlier
     /// answer there raised Edmonton's right answers from 0.934 to 0.945 (better on every seed),
     /// lost no synthetic pair and left the Table 5.1 study as it was. Only where the crowd
-    /// rule does not run (sparse scans, the wide schedule; [`Lorentz::crowd_ratio`]): on dense
-    /// scans with the rule, over seeds 1–20 it changed no right answer and no Table 5.1 trial
-    /// (about ten answers a seed by millimetres) for 5–8 % of the time.
+    /// rule does not run (the wide schedule; [`Lorentz::crowd_ratio`]): on dense scans with
+    /// the rule, over seeds 1–20 it changed no right answer and no Table 5.1 trial (about ten
+    /// answers a seed by millimetres) for 5–8 % of the time. Nor before the sparse finish
+    /// ([`Lorentz::sparse_finish`]): since the last pass of a sparse scan stops at 3 mm
+    /// ([`FINISHED_PASS_CONVERGENCE`]) it no longer settles aside, the finish places the
+    /// answer, and the second polish and its judgement were a tenth of a 1° match's time for
+    /// no steady gain (over seeds 1–10 and held-out 21–30 of `twin matchers`, Edmonton −1 and
+    /// ±0 right answers, the twin's 1° rows +1 and −2 of 6,000 each).
     pub before_last_margin: Option<f64>,
     /// A second σ schedule, metres, tried from the guess when the first answer is not trusted
     /// ([`TrustRule`]), or is trusted but fits loosely (under `wide_below` of the current
@@ -187,6 +192,12 @@ pub struct Lorentz {
     /// in the thesis; `None` (the default) stops it as the other passes before the last, and
     /// [`Lorentz::with_lines`] has [`FIRST_PASS_CONVERGENCE`].
     pub first_pass_convergence: Option<Convergence>,
+    /// For sparse scans, in the schedule the sparse finish follows (`sparse_finish`, with
+    /// `finished_pass_convergence` for its last pass): when the passes before the last stop,
+    /// instead of `early_convergence`. Not in the thesis; `None` (the default) stops them as
+    /// the other passes before the last, and [`Lorentz::with_lines`] has
+    /// [`SPARSE_EARLY_CONVERGENCE`].
+    pub sparse_early_convergence: Option<Convergence>,
     /// For sparse scans (not dense, as `dense_sigmas_m`): when the match has its answer, this
     /// point-to-line ICP ([`PointToLine`]) runs from it on the match's nearest-point cache, and
     /// its answer replaces the match's when the trust rule trusts it and it fits no fewer of the
@@ -459,6 +470,24 @@ pub const FIRST_PASS_CONVERGENCE: Convergence = Convergence {
     max_iterations: 30,
 };
 
+/// When the passes before the last of a sparse scan's schedule stop in [`Lorentz::with_lines`]
+/// ([`Lorentz::sparse_early_convergence`]), the sparse finish following the last: a search
+/// that moves the estimate by under 0.3 mm and 0.003°, as a dense scan's first pass
+/// ([`FIRST_PASS_CONVERGENCE`]), three times [`EARLY_CONVERGENCE`]. The last pass stops at
+/// 3 mm ([`FINISHED_PASS_CONVERGENCE`]) and the finish places the answer, so the passes before
+/// it need not crawl to a tenth of a millimetre. Over seeds 1–10 and held-out 21–30 of `twin
+/// matchers` (`lorentz-lines` alone, with the second polish already left out of sparse scans,
+/// [`Lorentz::before_last_margin`]): no right answer lost on any row and seven gained (the
+/// large guesses +5, the twin's 1° pairs with outliers +2), searches a pair 22.4 → 20.0 on the
+/// 1° pairs without outliers and 61.3 → 58.2 on Edmonton. The first pass alone so: nothing
+/// gained or lost, 22.4 → 21.3 searches; the first at 1 mm and 0.01°: 19.9 searches, but
+/// Edmonton and the 1° pairs with outliers each one pair fewer.
+pub const SPARSE_EARLY_CONVERGENCE: Convergence = Convergence {
+    translation_m: 3e-4,
+    rotation_rad: 3e-3 * std::f64::consts::PI / 180.0,
+    max_iterations: 30,
+};
+
 /// The second schedule of [`Lorentz::with_lines`]: σ 20 cm first, then 5 and 0.5 cm. At
 /// σ 2 cm a point farther than a few centimetres from its pair barely pulls, so from a guess
 /// 20 cm and 10° off the first pass can settle on whatever few pairs happen to be near (a
@@ -579,6 +608,7 @@ impl Lorentz {
             first_pass_surfaces: Some(FIRST_PASS_SURFACE_POINTS),
             early_convergence: Some(EARLY_CONVERGENCE),
             first_pass_convergence: Some(FIRST_PASS_CONVERGENCE),
+            sparse_early_convergence: Some(SPARSE_EARLY_CONVERGENCE),
             crowd_ratio: Some(CROWD_RATIO),
             sparse_finish: Some(SPARSE_FINISH),
             finished_pass_convergence: Some(FINISHED_PASS_CONVERGENCE),
@@ -973,6 +1003,7 @@ impl Default for Lorentz {
             stop_on_cycles: false,
             first_pass_surfaces: None,
             first_pass_convergence: None,
+            sparse_early_convergence: None,
             sparse_finish: None,
             finished_pass_convergence: None,
         }
@@ -1330,7 +1361,7 @@ impl Lorentz {
             if pass > 0 && pass + 1 == sigmas.len() && self.polish_rounds > 0 {
                 before_last = self
                     .before_last_margin
-                    .filter(|_| crowd.is_none())
+                    .filter(|_| crowd.is_none() && !finished)
                     .map(|margin| (phi, margin));
             }
             result.settled = false;
@@ -1406,10 +1437,16 @@ impl Lorentz {
                     phi[2] - before[2],
                     wrap_angle(phi[0] - before[0]),
                 );
-                let stop = match (self.first_pass_convergence, self.early_convergence) {
+                let more_passes = pass + 1 < sigmas.len();
+                let stop = match (
+                    self.first_pass_convergence,
+                    self.sparse_early_convergence.filter(|_| finished),
+                    self.early_convergence,
+                ) {
                     // The crowd rule marks a dense scan's schedules but the wide one.
-                    (Some(first), _) if pass == 0 && crowd.is_some() && sigmas.len() > 1 => first,
-                    (_, Some(early)) if pass + 1 < sigmas.len() => early,
+                    (Some(first), _, _) if pass == 0 && crowd.is_some() && more_passes => first,
+                    (_, Some(sparse), _) if more_passes => sparse,
+                    (_, _, Some(early)) if more_passes => early,
                     _ => last_stop,
                 };
                 if stop.reached(&step) {
