@@ -482,11 +482,7 @@ pub const FIRST_PASS_CONVERGENCE: Convergence = Convergence {
 /// 1° pairs without outliers and 61.3 → 58.2 on Edmonton. The first pass alone so: nothing
 /// gained or lost, 22.4 → 21.3 searches; the first at 1 mm and 0.01°: 19.9 searches, but
 /// Edmonton and the 1° pairs with outliers each one pair fewer.
-pub const SPARSE_EARLY_CONVERGENCE: Convergence = Convergence {
-    translation_m: 3e-4,
-    rotation_rad: 3e-3 * std::f64::consts::PI / 180.0,
-    max_iterations: 30,
-};
+pub const SPARSE_EARLY_CONVERGENCE: Convergence = FIRST_PASS_CONVERGENCE;
 
 /// The second schedule of [`Lorentz::with_lines`]: σ 20 cm first, then 5 and 0.5 cm. At
 /// σ 2 cm a point farther than a few centimetres from its pair barely pulls, so from a guess
@@ -1365,6 +1361,19 @@ impl Lorentz {
                     .map(|margin| (phi, margin));
             }
             result.settled = false;
+            // When a search of this pass has moved the estimate little enough.
+            let more_passes = pass + 1 < sigmas.len();
+            let stop = match (
+                self.first_pass_convergence,
+                self.sparse_early_convergence.filter(|_| finished),
+                self.early_convergence,
+            ) {
+                // The crowd rule marks a dense scan's schedules but the wide one.
+                (Some(first), _, _) if pass == 0 && crowd.is_some() && more_passes => first,
+                (_, Some(sparse), _) if more_passes => sparse,
+                (_, _, Some(early)) if more_passes => early,
+                _ => last_stop,
+            };
             // The estimate before the search before the last, for `stop_on_cycles`.
             let mut two_back: Option<[f64; 3]> = None;
             for _ in 0..self.convergence.max_iterations {
@@ -1437,18 +1446,6 @@ impl Lorentz {
                     phi[2] - before[2],
                     wrap_angle(phi[0] - before[0]),
                 );
-                let more_passes = pass + 1 < sigmas.len();
-                let stop = match (
-                    self.first_pass_convergence,
-                    self.sparse_early_convergence.filter(|_| finished),
-                    self.early_convergence,
-                ) {
-                    // The crowd rule marks a dense scan's schedules but the wide one.
-                    (Some(first), _, _) if pass == 0 && crowd.is_some() && more_passes => first,
-                    (_, Some(sparse), _) if more_passes => sparse,
-                    (_, _, Some(early)) if more_passes => early,
-                    _ => last_stop,
-                };
                 if stop.reached(&step) {
                     result.settled = true;
                     break;
