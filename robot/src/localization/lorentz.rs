@@ -31,6 +31,7 @@ pub const THESIS_SIGMAS: [f64; 3] = [2.0, 5.0, 0.5];
 pub struct Lorentz {
     /// σ of each pass, metres. Default: the thesis's 2 → 5 → 0.5 in centimetres (0.02, 0.05,
     /// 0.005 m); `cargo run --release --example sigma_sweep` shows why centimetres.
+    /// [`Lorentz::with_lines`] has [`SPARSE_SIGMAS`], the finish in place of the last pass.
     pub sigmas_m: Vec<f64>,
     /// λ at the start of each minimisation. Default 0.001.
     pub lambda0: f64,
@@ -93,8 +94,8 @@ pub struct Lorentz {
     /// rule does not run (the wide schedule; [`Lorentz::crowd_ratio`]): on dense scans with
     /// the rule, over seeds 1–20 it changed no right answer and no Table 5.1 trial (about ten
     /// answers a seed by millimetres) for 5–8 % of the time. Nor before the sparse finish
-    /// ([`Lorentz::sparse_finish`]): since the last pass of a sparse scan stops at 3 mm
-    /// ([`FINISHED_PASS_CONVERGENCE`]) it no longer settles aside, the finish places the
+    /// ([`Lorentz::sparse_finish`]): since the last pass of a sparse scan stopped at 3 mm
+    /// (before [`SPARSE_SIGMAS`] left that pass out) it no longer settled aside, the finish places the
     /// answer, and the second polish and its judgement were a tenth of a 1° match's time for
     /// no steady gain (over seeds 1–10 and held-out 21–30 of `twin matchers`, Edmonton −1 and
     /// ±0 right answers, the twin's 1° rows +1 and −2 of 6,000 each).
@@ -192,10 +193,10 @@ pub struct Lorentz {
     /// in the thesis; `None` (the default) stops it as the other passes before the last, and
     /// [`Lorentz::with_lines`] has [`FIRST_PASS_CONVERGENCE`].
     pub first_pass_convergence: Option<Convergence>,
-    /// For sparse scans, in the schedule the sparse finish follows (`sparse_finish`, with
-    /// `finished_pass_convergence` for its last pass): when the passes before the last stop,
-    /// instead of `early_convergence`. Not in the thesis; `None` (the default) stops them as
-    /// the other passes before the last, and [`Lorentz::with_lines`] has
+    /// For sparse scans, in the schedule the sparse finish follows (`sparse_finish`): when
+    /// every σ pass stops, the last included, instead of `early_convergence` and
+    /// `convergence`; the finish takes the answer on. Not in the thesis; `None` (the default)
+    /// stops them as the other schedules' passes, and [`Lorentz::with_lines`] has
     /// [`SPARSE_EARLY_CONVERGENCE`].
     pub sparse_early_convergence: Option<Convergence>,
     /// For sparse scans (not dense, as `dense_sigmas_m`): when the match has its answer, this
@@ -204,11 +205,6 @@ pub struct Lorentz {
     /// current points. Not in the thesis; `None` (the default) keeps the match's answer, and
     /// [`Lorentz::with_lines`] has [`SPARSE_FINISH`].
     pub sparse_finish: Option<PointToLine>,
-    /// With `sparse_finish`: when the last σ pass of the schedule it follows (`sigmas_m`, on
-    /// sparse scans) stops, instead of `convergence`; the finish takes the answer on from
-    /// there. Not in the thesis; `None` (the default) stops that pass as `convergence`, and
-    /// [`Lorentz::with_lines`] has [`FINISHED_PASS_CONVERGENCE`].
-    pub finished_pass_convergence: Option<Convergence>,
 }
 
 /// The schedule of [`Lorentz::with_lines`] for dense scans (beams under 0.75° apart): σ 5 cm,
@@ -423,25 +419,6 @@ pub const SPARSE_FINISH: PointToLine = PointToLine {
     ..PointToLine::CSM
 };
 
-/// When the last σ pass of a sparse scan stops in [`Lorentz::with_lines`], the sparse finish
-/// ([`SPARSE_FINISH`]) after it ([`Lorentz::finished_pass_convergence`]): a search that moves
-/// the estimate by under 3 mm and 0.03°, where the other last passes go on to 0.01 mm and
-/// 0.0001°. The point-to-line finish places the answer from there. Going on, the σ 5 mm pass
-/// took a third of a sparse match's searches (17 of 46 on the twin's 1° pairs), and on
-/// Edmonton's corridors it slid on along walls the 1° beams hold loosely. Over seeds 1–20 of
-/// `twin matchers` (`lorentz-lines` alone): Edmonton's right answers 5,753 → 5,801 (+53 −5;
-/// at 1 mm and 0.01° 5,778, at 2 mm and 0.02° 5,792; `pl-icp` 5,779), the large guesses
-/// 5,896 → 5,909 (+16 −3), the dense rows the same answers to the bit; the twin's 1° pairs
-/// (seeds 1–10, 3,000 a row) 2,998 → 2,997 without outliers and 2,994 → 2,992 with 20 %.
-/// Held out, seeds 21–30: Edmonton 2,877 → 2,898 (+25 −4), the large guesses 2,946 → 2,951
-/// (+5 −0), the 1° rows the same right answers; the searches a pair fell by a third on the 1°
-/// rows (58.8 → 39.4 without outliers) and by a fifth on Edmonton (84.9 → 65.7).
-pub const FINISHED_PASS_CONVERGENCE: Convergence = Convergence {
-    translation_m: 3e-3,
-    rotation_rad: 3e-2 * std::f64::consts::PI / 180.0,
-    max_iterations: 30,
-};
-
 /// When the σ passes before the last stop in [`Lorentz::with_lines`]
 /// ([`Lorentz::early_convergence`]): a search that moves the estimate by under 0.1 mm and
 /// 0.001°, ten times the last pass's test; the next pass moves the estimate on anyway. Alone,
@@ -470,19 +447,36 @@ pub const FIRST_PASS_CONVERGENCE: Convergence = Convergence {
     max_iterations: 30,
 };
 
-/// When the passes before the last of a sparse scan's schedule stop in [`Lorentz::with_lines`]
-/// ([`Lorentz::sparse_early_convergence`]), the sparse finish following the last: a search
-/// that moves the estimate by under 0.3 mm and 0.003°, as a dense scan's first pass
-/// ([`FIRST_PASS_CONVERGENCE`]), three times [`EARLY_CONVERGENCE`]. The last pass stops at
-/// 3 mm ([`FINISHED_PASS_CONVERGENCE`]) and the finish places the answer, so the passes before
-/// it need not crawl to a tenth of a millimetre. Over seeds 1–10 and held-out 21–30 of `twin
-/// matchers` (`lorentz-lines` alone, with the second polish already left out of sparse scans,
-/// [`Lorentz::before_last_margin`]): no right answer lost on any row and seven gained (the
-/// large guesses +5, the twin's 1° pairs with outliers +2), searches a pair 22.4 → 20.0 on the
-/// 1° pairs without outliers and 61.3 → 58.2 on Edmonton. The first pass alone so: nothing
-/// gained or lost, 22.4 → 21.3 searches; the first at 1 mm and 0.01°: 19.9 searches, but
-/// Edmonton and the 1° pairs with outliers each one pair fewer.
+/// When the σ passes of a sparse scan's schedule ([`SPARSE_SIGMAS`]) stop in
+/// [`Lorentz::with_lines`] ([`Lorentz::sparse_early_convergence`]), the sparse finish
+/// following the last: a search that moves the estimate by under 0.3 mm and 0.003°, as a
+/// dense scan's first pass ([`FIRST_PASS_CONVERGENCE`]), three times [`EARLY_CONVERGENCE`]; the
+/// finish places the answer, so no pass need crawl to a tenth of a millimetre. For the passes
+/// before the last, over seeds 1–10 and held-out 21–30 of `twin matchers` (`lorentz-lines`
+/// alone, with the second polish already left out of sparse scans,
+/// [`Lorentz::before_last_margin`], and the thesis's σ 5 mm pass still last): no right answer
+/// lost on any row and seven gained (the large guesses +5, the twin's 1° pairs with outliers
+/// +2), searches a pair 22.4 → 20.0 on the 1° pairs without outliers and 61.3 → 58.2 on
+/// Edmonton; the first pass alone so: nothing gained or lost, 22.4 → 21.3 searches; the first
+/// at 1 mm and 0.01°: 19.9 searches, but Edmonton and the 1° pairs with outliers each one pair
+/// fewer. The σ 5 mm pass stopped at 3 mm and 0.03° then (it had crawled along Edmonton's
+/// walls); the last pass is now the 5 cm one, and stopped there it left eleven answers of
+/// 6,000 on the 1° rows 6–13 cm along their walls, trusted (seeds 1–10): it stops as the
+/// others.
 pub const SPARSE_EARLY_CONVERGENCE: Convergence = FIRST_PASS_CONVERGENCE;
+
+/// The σ schedule of [`Lorentz::with_lines`] for sparse scans (beams 0.75° apart or more, a
+/// SICK's 1° mode; [`Lorentz::sigmas_m`]): the thesis's 2 → 5 cm without its last pass at
+/// 5 mm ([`THESIS_SIGMAS`]), metres. The point-to-line finish that follows ([`SPARSE_FINISH`])
+/// places the answer where the narrow pass did: stopped at 3 mm, that pass had come to a
+/// sixth of a 1° match's correspondence searches. Over seeds 1–10 and held-out 21–30 of
+/// `twin matchers` (`lorentz-lines` alone, every pass stopped at
+/// [`SPARSE_EARLY_CONVERGENCE`]): Edmonton's right answers 2,906 → 2,911 and 2,898 → 2,910
+/// (+28 −11 over both), the large guesses 2,961 → 2,967 and 2,956 → 2,957, the twin's 1° pairs
+/// 2,998 → 2,998 and 2,994 → 2,993 without outliers, 2,980 → 2,981 and 2,990 → 2,991 with
+/// 20 %; the dense rows the same answers to the bit; searches a pair 20.0 → 18.2 on the 1°
+/// pairs without outliers, 58.2 → 54.0 on Edmonton.
+pub const SPARSE_SIGMAS: [f64; 2] = [0.02, 0.05];
 
 /// The second schedule of [`Lorentz::with_lines`]: σ 20 cm first, then 5 and 0.5 cm. At
 /// σ 2 cm a point farther than a few centimetres from its pair barely pulls, so from a guess
@@ -605,9 +599,9 @@ impl Lorentz {
             early_convergence: Some(EARLY_CONVERGENCE),
             first_pass_convergence: Some(FIRST_PASS_CONVERGENCE),
             sparse_early_convergence: Some(SPARSE_EARLY_CONVERGENCE),
+            sigmas_m: SPARSE_SIGMAS.to_vec(),
             crowd_ratio: Some(CROWD_RATIO),
             sparse_finish: Some(SPARSE_FINISH),
-            finished_pass_convergence: Some(FINISHED_PASS_CONVERGENCE),
             ..Lorentz::default()
         }
     }
@@ -1001,7 +995,6 @@ impl Default for Lorentz {
             first_pass_convergence: None,
             sparse_early_convergence: None,
             sparse_finish: None,
-            finished_pass_convergence: None,
         }
     }
 }
@@ -1340,13 +1333,9 @@ impl Lorentz {
         // With `first_pass_surfaces` on a dense scan: the fewest points a surface that holds a
         // pair must have been fitted to.
         let surfaces = self.first_pass_surfaces.filter(|_| crowd.is_some());
-        // The last pass of the schedule the sparse finish follows stops sooner: the finish
-        // takes the answer on.
+        // The passes of the schedule the sparse finish follows stop sooner: the finish takes
+        // the answer on.
         let finished = self.sparse_finish.is_some() && crowd.is_none() && sigmas == self.sigmas_m;
-        let last_stop = self
-            .finished_pass_convergence
-            .filter(|_| finished)
-            .unwrap_or(self.convergence);
         for (pass, &sigma) in sigmas.iter().enumerate() {
             if pass == 1
                 && let Some((_, share)) = enough
@@ -1370,9 +1359,9 @@ impl Lorentz {
             ) {
                 // The crowd rule marks a dense scan's schedules but the wide one.
                 (Some(first), _, _) if pass == 0 && crowd.is_some() && more_passes => first,
-                (_, Some(sparse), _) if more_passes => sparse,
+                (_, Some(sparse), _) => sparse,
                 (_, _, Some(early)) if more_passes => early,
-                _ => last_stop,
+                _ => self.convergence,
             };
             // The estimate before the search before the last, for `stop_on_cycles`.
             let mut two_back: Option<[f64; 3]> = None;
@@ -1515,7 +1504,8 @@ mod tests {
 
     /// A scan's beam step is read from its points: 0.5° for 361 beams over 180°, also with
     /// beams missing (no return) and ranges jumping from beam to beam; none without two
-    /// neighbouring beams; and the schedule follows it.
+    /// neighbouring beams; and the schedule follows it (the sparse one without the thesis's
+    /// last pass, which the finish replaces).
     #[test]
     fn the_beam_step_picks_the_schedule() {
         let scan = |beams: usize, fov_deg: f64, ranges: &dyn Fn(usize) -> f64| {
@@ -1542,9 +1532,12 @@ mod tests {
         assert_eq!(beam_step(&lonely), None);
         let m = Lorentz::with_lines();
         assert_eq!(m.schedule(&lms), DENSE_SIGMAS.as_slice());
-        assert_eq!(m.schedule(&sparse), m.sigmas_m.as_slice());
-        assert_eq!(m.schedule(&lonely), m.sigmas_m.as_slice());
-        assert_eq!(Lorentz::default().schedule(&lms), m.sigmas_m.as_slice());
+        assert_eq!(m.schedule(&sparse), SPARSE_SIGMAS.as_slice());
+        assert_eq!(m.schedule(&lonely), SPARSE_SIGMAS.as_slice());
+        // Without a dense schedule every scan takes the thesis's three passes.
+        let thesis = Lorentz::default();
+        assert_eq!(thesis.sigmas_m.len(), THESIS_SIGMAS.len());
+        assert_eq!(thesis.schedule(&lms), thesis.sigmas_m.as_slice());
     }
 
     /// Of the pairs on one reference point, those more than three times farther than the
