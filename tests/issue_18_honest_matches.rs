@@ -845,13 +845,13 @@ fn tally(totals: &mut Vec<(String, usize, usize)>, row: &str, a: usize, b: usize
 /// compared (and so with the thesis's last pass, which the finish replaces on sparse scans).
 #[test]
 fn dense_scans_narrow_their_sigma_throughout() {
-    use robot::localization::{Lorentz, THESIS_SIGMAS, beam_step};
+    use robot::localization::{Lorentz, beam_step};
     // Without the finish, sparse scans keep the thesis's last pass too (`SPARSE_SIGMAS`
     // leaves it to the finish).
     let narrowing = Lorentz {
         crowd_ratio: None,
         sparse_finish: None,
-        sigmas_m: THESIS_SIGMAS.iter().map(|s| s * 0.01).collect(),
+        sigmas_m: thesis_sigmas(),
         ..Lorentz::with_lines()
     };
     let thesis = Lorentz {
@@ -1685,21 +1685,21 @@ fn an_odometry_glitch_does_not_hold_the_answer() {
 /// replaces (`SPARSE_SIGMAS`).
 #[test]
 fn a_point_to_line_finish_steadies_sparse_answers() {
-    use robot::localization::{Convergence, Lorentz, PointToLine, SPARSE_FINISH, THESIS_SIGMAS};
-    let unhurried = Lorentz::with_lines();
+    use robot::localization::{Convergence, Lorentz, PointToLine, SPARSE_FINISH};
+    let base = Lorentz::with_lines();
     let without = Lorentz {
         sparse_finish: None,
-        sigmas_m: THESIS_SIGMAS.iter().map(|s| s * 0.01).collect(),
-        ..unhurried.clone()
+        sigmas_m: thesis_sigmas(),
+        ..base.clone()
     };
-    let with = unhurried.clone();
+    let with = base.clone();
     assert_eq!(with.sparse_finish, Some(SPARSE_FINISH));
     let cycling = Lorentz {
         sparse_finish: Some(PointToLine {
             stop_on_cycles: None,
             ..SPARSE_FINISH
         }),
-        ..unhurried.clone()
+        ..base.clone()
     };
     // A finish of no iterations: the σ passes of `with` (which, followed by a finish, differ
     // from `without`'s), whose iterations the others' less are their finishes'.
@@ -1711,7 +1711,7 @@ fn a_point_to_line_finish_steadies_sparse_answers() {
             },
             ..SPARSE_FINISH
         }),
-        ..unhurried
+        ..base
     };
     let matchers = [&without, &with, &cycling, &idle];
     // Each Edmonton pair's answers from every seed, without and with.
@@ -1785,15 +1785,24 @@ fn a_point_to_line_finish_steadies_sparse_answers() {
 /// dense scans do not change.
 #[test]
 fn sparse_scans_leave_the_narrow_pass_to_the_finish() {
-    use robot::localization::{Lorentz, SPARSE_SIGMAS, THESIS_SIGMAS};
+    use robot::localization::{Lorentz, SPARSE_SIGMAS};
     let two = Lorentz::with_lines();
     assert_eq!(two.sigmas_m, SPARSE_SIGMAS.to_vec());
     let three = Lorentz {
-        sigmas_m: THESIS_SIGMAS.iter().map(|s| s * 0.01).collect(),
+        sigmas_m: thesis_sigmas(),
         ..Lorentz::with_lines()
     };
     let rows = sparse_rows_side_by_side([&three, &two], [33, 34]);
     assert_fewer_searches(&rows, 1, (20, 19));
+}
+
+/// The thesis's σ schedule, 2 → 5 → 0.5 cm, in metres: what a matcher without the sparse
+/// finish runs on sparse scans (`SPARSE_SIGMAS` leaves the last pass to the finish).
+fn thesis_sigmas() -> Vec<f64> {
+    robot::localization::THESIS_SIGMAS
+        .iter()
+        .map(|s| s * 0.01)
+        .collect()
 }
 
 /// Two sparse-scan matchers side by side on `seeds` (150 pairs a row): for Edmonton and the

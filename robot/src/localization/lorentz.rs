@@ -460,7 +460,7 @@ pub const FIRST_PASS_CONVERGENCE: Convergence = Convergence {
 /// Edmonton; the first pass alone so: nothing gained or lost, 22.4 → 21.3 searches; the first
 /// at 1 mm and 0.01°: 19.9 searches, but Edmonton and the 1° pairs with outliers each one pair
 /// fewer. The σ 5 mm pass stopped at 3 mm and 0.03° then (it had crawled along Edmonton's
-/// walls); the last pass is now the 5 cm one, and stopped there it left eleven answers of
+/// walls); the last pass is now the 5 cm one, and stopped there it left nine answers of
 /// 6,000 on the 1° rows 6–13 cm along their walls, trusted (seeds 1–10): it stops as the
 /// others.
 pub const SPARSE_EARLY_CONVERGENCE: Convergence = FIRST_PASS_CONVERGENCE;
