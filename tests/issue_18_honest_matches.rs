@@ -1841,12 +1841,12 @@ fn sparse_rows_side_by_side(
 }
 
 /// On sparse scans too, a search whose line normals spread (a tenth,
-/// `SPARSE_LINE_RESIDUALS_SPREAD`; a fifth when this test was written) counts a point projected inside a reference line by its
-/// distance to that line alone: the first σ pass no longer crawls along the walls a search at
-/// a time. On seeds held out from the twenty it was chosen on (33 and 34, 150 pairs a row):
-/// the twin's 1° pairs without outliers take at least a third fewer correspondence searches,
-/// Edmonton's fewer; no sparse row is right on more than two fewer pairs; the dense scans do
-/// not change.
+/// `SPARSE_LINE_RESIDUALS_SPREAD`; a fifth when this test was written) counts a point projected
+/// inside a reference line by its distance to that line alone: the first σ pass no longer crawls
+/// along the walls a search at a time. On seeds held out from the twenty it was chosen on (33 and
+/// 34, 150 pairs a row): the twin's 1° pairs without outliers take at least a third fewer
+/// correspondence searches, Edmonton's fewer; no sparse row is right on more than two fewer pairs;
+/// the dense scans do not change.
 #[test]
 fn sparse_scans_slide_along_their_lines_too() {
     use robot::localization::{Lorentz, SPARSE_LINE_RESIDUALS_SPREAD};

@@ -83,22 +83,22 @@ pub struct Lorentz {
     /// Not in the thesis; `None` (the default) stops at `polish_rounds`, and
     /// [`Lorentz::with_lines`] has [`POLISH_MORE`].
     pub polish_more: Option<(f64, usize)>,
-    /// With the polish: the answer from before the last σ pass is polished too, and kept when
-    /// the share of current points within 5 cm of the reference's surfaces is more than this
-    /// above the last pass's. Not in the thesis; `None` (the default) leaves it out, and
+    /// With the polish: the answer from before the last σ pass is polished too, and kept when the
+    /// share of current points within 5 cm of the reference's surfaces is more than this above the
+    /// last pass's. Not in the thesis; `None` (the default) leaves it out, and
     /// [`Lorentz::with_lines`] has 0.01. The last pass, at σ 5 mm, is what makes the synthetic
-    /// pairs precise; on Edmonton's sparse 1° scans it sometimes settles a few centimetres
-    /// aside, and over 2,400 pairs (`twin matchers`, seeds 1–6, 11, 12) keeping the earlier
-    /// answer there raised Edmonton's right answers from 0.934 to 0.945 (better on every seed),
-    /// lost no synthetic pair and left the Table 5.1 study as it was. Only where the crowd
-    /// rule does not run (the wide schedule; [`Lorentz::crowd_ratio`]): on dense scans with
-    /// the rule, over seeds 1–20 it changed no right answer and no Table 5.1 trial (about ten
-    /// answers a seed by millimetres) for 5–8 % of the time. Nor before the sparse finish
-    /// ([`Lorentz::sparse_finish`]): since the last pass of a sparse scan stopped at 3 mm
-    /// (before [`SPARSE_SIGMAS`] left that pass out) it no longer settled aside, the finish places the
-    /// answer, and the second polish and its judgement were a tenth of a 1° match's time for
-    /// no steady gain (over seeds 1–10 and held-out 21–30 of `twin matchers`, Edmonton −1 and
-    /// ±0 right answers, the twin's 1° rows +1 and −2 of 6,000 each).
+    /// pairs precise; on Edmonton's sparse 1° scans it sometimes settles a few centimetres aside,
+    /// and over 2,400 pairs (`twin matchers`, seeds 1–6, 11, 12) keeping the earlier answer there
+    /// raised Edmonton's right answers from 0.934 to 0.945 (better on every seed), lost no
+    /// synthetic pair and left the Table 5.1 study as it was. Only where the crowd rule does not
+    /// run (the wide schedule; [`Lorentz::crowd_ratio`]): on dense scans with the rule, over seeds
+    /// 1–20 it changed no right answer and no Table 5.1 trial (about ten answers a seed by
+    /// millimetres) for 5–8 % of the time. Nor before the sparse finish
+    /// ([`Lorentz::sparse_finish`]): since the last pass of a sparse scan stopped at 3 mm (before
+    /// [`SPARSE_SIGMAS`] left that pass out) it no longer settled aside, the finish places the
+    /// answer, and the second polish and its judgement were a tenth of a 1° match's time for no
+    /// steady gain (over seeds 1–10 and held-out 21–30 of `twin matchers`, Edmonton −1 and ±0 right
+    /// answers, the twin's 1° rows +1 and −2 of 6,000 each).
     pub before_last_margin: Option<f64>,
     /// A second σ schedule, metres, tried from the guess when the first answer is not trusted
     /// ([`TrustRule`]), or is trusted but fits loosely (under `wide_below` of the current
