@@ -213,6 +213,105 @@ impl TrustRule {
     }
 }
 
+/// Where the points that pin an answer along its weakest direction would have it
+/// ([`slide_vote`]).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub(super) struct SlideVote {
+    /// The unit direction, in the reference frame, in which the inliers' surfaces hold the
+    /// answer least.
+    pub direction: [f64; 2],
+    /// The shift along `direction`, metres, that brings the most pinned points within the trust
+    /// rule's distance of their surfaces: the middle of the shifts that do.
+    pub shift_m: f64,
+    /// How many more pinned points that shift brings within than the answer has.
+    pub gain: usize,
+}
+
+/// How the points that pin `pose` along its weakest direction vote for a shift along it. The
+/// inliers' surfaces (within `inlier_m`) give the answer's information on x and y (the sum of
+/// their normals' outer products); the direction of the smaller eigenvalue is where a match
+/// can slide, along a wall. The points that pin it there are those whose surface normal lies
+/// within 60° of that direction and that lie within `reach` (and `inlier_m`) of their surface:
+/// a shift `s` moves such a point's distance from its surface by `s` times the cosine, so each
+/// is an inlier for one interval of shifts, and a sweep over the intervals' ends finds the
+/// shift within `reach` that makes the most of them inliers. No search beyond the one at
+/// `pose` (on `last`, as [`TrustRule::assess_near`] takes it); `None` where no current point
+/// has a nearest reference point.
+pub(super) fn slide_vote(
+    reference: &Reference,
+    current: &[[f64; 2]],
+    pose: &Pose2,
+    last: Option<&mut [Option<LastNearest>]>,
+    inlier_m: f64,
+    reach: f64,
+) -> Option<SlideVote> {
+    // The information's x–y block [[a, b], [b, c]], and each point near its surface.
+    let mut info = [0.0f64; 3];
+    let mut near = Vec::new();
+    for constraint in constraints(reference, current, pose, last) {
+        let Some(jac) = constraint.jacobian else {
+            continue;
+        };
+        let r = constraint.residual;
+        if r.abs() <= inlier_m && !constraint.beyond {
+            info[0] += jac[0] * jac[0];
+            info[1] += jac[0] * jac[1];
+            info[2] += jac[1] * jac[1];
+        }
+        if r.abs() <= reach + inlier_m {
+            near.push((r, [jac[0], jac[1]]));
+        }
+    }
+    if near.is_empty() {
+        return None;
+    }
+    let [a, b, c] = info;
+    let root = ((a - c) * (a - c) + 4.0 * b * b).sqrt();
+    let small = 0.5 * (a + c - root);
+    let direction = if b.abs() > 1e-12 {
+        let v = [small - c, b];
+        let n = v[0].hypot(v[1]);
+        [v[0] / n, v[1] / n]
+    } else if a < c {
+        [1.0, 0.0]
+    } else {
+        [0.0, 1.0]
+    };
+    // Each pinned point's interval of shifts, as the ends' events: +1 where it begins.
+    let mut events = Vec::new();
+    let mut held = 0usize;
+    for (r, n) in near {
+        let k = n[0] * direction[0] + n[1] * direction[1];
+        if k.abs() < 0.5 {
+            continue;
+        }
+        let (lo, hi) = ((-inlier_m - r) / k, (inlier_m - r) / k);
+        let (lo, hi) = (lo.min(hi), lo.max(hi));
+        if lo <= 0.0 && 0.0 <= hi {
+            held += 1;
+        }
+        events.push((lo, 1i32));
+        events.push((hi, -1i32));
+    }
+    // Beginnings before ends at one shift: an interval that begins where another ends overlaps it.
+    events.sort_by(|x, y| x.0.total_cmp(&y.0).then(y.1.cmp(&x.1)));
+    let (mut count, mut most, mut shift_m) = (0i32, 0i32, 0.0f64);
+    for (i, &(at, d)) in events.iter().enumerate() {
+        count += d;
+        if d > 0 && count > most && at.abs() <= reach {
+            // The shifts from here to the next end or beginning hold `count` points.
+            let next = events.get(i + 1).map_or(at, |e| e.0);
+            most = count;
+            shift_m = 0.5 * (at + next);
+        }
+    }
+    Some(SlideVote {
+        direction,
+        shift_m,
+        gain: (most.max(0) as usize).saturating_sub(held),
+    })
+}
+
 /// The last stage of a match: Gauss–Newton on the point-to-line error of the current points
 /// within `gate` metres of the reference's surfaces, each weighted by the Cauchy weight
 /// `1 / (1 + (e/c)²)` (a residual of `c` metres counts half), re-associated every round, for at
@@ -736,5 +835,33 @@ mod tests {
         let q = rule.assess(&reference(&corner()), &[], &Pose2::IDENTITY);
         assert_eq!(q, MatchQuality::NONE);
         assert!(!rule.trusts(&q));
+    }
+
+    /// A corridor's wall 6 m long and its end wall 2 m across, seen from inside (points 1 cm
+    /// apart in scan order). An answer 8 cm short along the corridor keeps the long wall's points
+    /// on it, so the inliers hold it only across the corridor; the end wall's points, 8 cm off
+    /// it, vote for the shift back: along the corridor, 8 cm (within the 1 cm the plateau of
+    /// shifts allows for noise-free points), every one of them. At the truth they hold it and
+    /// ask for nothing.
+    #[test]
+    fn a_slide_vote_points_back_along_the_wall() {
+        let mut points: Vec<[f64; 2]> = (0..=600).map(|i| [-1.0 + 0.01 * i as f64, 1.0]).collect();
+        points.extend((1..=200).map(|i| [5.0, 1.0 - 0.01 * i as f64]));
+        let reference = reference(&points);
+        let inlier_m = TrustRule::default().inlier_m;
+        let short = Pose2::new(-0.08, 0.0, 0.0);
+        let vote = slide_vote(&reference, &points, &short, None, inlier_m, 0.2).unwrap();
+        assert!(vote.direction[0].abs() > 0.999, "{vote:?}");
+        let back = vote.shift_m * vote.direction[0];
+        assert!((back - 0.08).abs() < 0.01, "{vote:?}");
+        assert!(vote.gain >= 190, "{vote:?}");
+        let truth = slide_vote(&reference, &points, &Pose2::IDENTITY, None, inlier_m, 0.2);
+        assert_eq!(truth.map(|v| v.gain), Some(0));
+        // No point near any surface: no vote.
+        let far = Pose2::new(10.0, 10.0, 0.0);
+        assert_eq!(
+            slide_vote(&reference, &points, &far, None, inlier_m, 0.2),
+            None
+        );
     }
 }
