@@ -1313,8 +1313,8 @@ impl Lorentz {
 
     /// The dense match's answer `matched`, checked as `check` says ([`SlideCheck`]): the σ
     /// passes from where the points that pin it along its weakest direction would have it,
-    /// their answer kept when trusted and fitting `check.margin` more of the current points;
-    /// the iterations of both.
+    /// their answer kept when trusted, `check.min_shift_m` or more from `matched` and fitting
+    /// `check.margin` more of the current points; the iterations of both.
     fn check_slide(
         &self,
         check: &SlideCheck,
