@@ -902,8 +902,8 @@ impl Crowding {
 /// Line-assisted association: the reference's local lines ([`lines_of`]), the margin past a
 /// segment's ends a projection may reach, and when the pairs projected inside a line count
 /// their distance to it alone ([`Lorentz::line_residuals_spread`], for dense scans).
-struct Assist {
-    lines: Vec<Option<Line>>,
+struct Assist<'a> {
+    lines: &'a [Option<Line>],
     margin: f64,
     spread: Option<f64>,
 }
@@ -1070,10 +1070,16 @@ impl ScanMatcher for Lorentz {
         // Each current point's last nearest reference point, for every search of the match.
         let mut last = vec![None; current.len()];
         let dense = self.is_dense(current);
-        let matched = self.match_from((reference, current), dense, guess, &mut last);
+        // The reference's lines, grown once for every match from here.
+        let grown = self
+            .lines
+            .as_ref()
+            .map(|params| lines_of(&reference.points.xy, params));
+        let grown = grown.as_deref();
+        let matched = self.match_from((reference, current), grown, dense, guess, &mut last);
         let matched = match &self.slide_check {
             Some(check) if dense => {
-                self.check_slide(check, (reference, current), matched, &mut last)
+                self.check_slide(check, (reference, current), grown, matched, &mut last)
             }
             _ => matched,
         };
@@ -1089,10 +1095,12 @@ impl ScanMatcher for Lorentz {
 impl Lorentz {
     /// The match from `guess`: the σ passes, and when their answer is loose or untrusted the
     /// wide schedule, the restarts and the coarse search's starts; `dense` as
-    /// [`Lorentz::is_dense`] says of `current`, `last` as in [`Lorentz::passes`].
+    /// [`Lorentz::is_dense`] says of `current`, `last` as in [`Lorentz::passes`], `grown` the
+    /// reference's lines ([`lines_of`]) when the matcher has `lines`.
     fn match_from(
         &self,
         (reference, current): (&Reference, &ScanPoints),
+        grown: Option<&[Option<Line>]>,
         dense: bool,
         guess: Pose2,
         last: &mut [Option<LastNearest>],
@@ -1103,7 +1111,7 @@ impl Lorentz {
             self.sparse_line_residuals_spread
         };
         let first_spread = self.first_spread.filter(|_| dense && spread.is_some());
-        let mut lines = self.assist(reference, first_spread.or(spread));
+        let mut lines = self.assist(grown, first_spread.or(spread));
         let sigmas = self.schedule_for(dense);
         let crowd = self.crowd_ratio.filter(|_| dense);
         let first_steps = self.first_max_steps.unwrap_or(self.max_steps);
@@ -1301,24 +1309,31 @@ impl Lorentz {
         (best, iterations)
     }
 
-    /// The reference's lines for line-assisted association, their residuals taken when the
-    /// normals spread by `spread`; `None` without `lines`.
-    fn assist(&self, reference: &Reference, spread: Option<f64>) -> Option<Assist> {
-        self.lines.as_ref().map(|params| Assist {
-            lines: lines_of(&reference.points.xy, params),
+    /// Line-assisted association on the reference's lines `grown`, their residuals taken when
+    /// the normals spread by `spread`; `None` without `lines`.
+    fn assist<'a>(
+        &self,
+        grown: Option<&'a [Option<Line>]>,
+        spread: Option<f64>,
+    ) -> Option<Assist<'a>> {
+        let (params, lines) = self.lines.as_ref().zip(grown)?;
+        Some(Assist {
+            lines,
             margin: params.end_margin_m,
             spread,
         })
     }
 
     /// The dense match's answer `matched`, checked as `check` says ([`SlideCheck`]): the σ
-    /// passes from where the points that pin it along its weakest direction would have it,
+    /// passes (on the lines `grown`) from where the points that pin it along its weakest
+    /// direction would have it,
     /// their answer kept when trusted, `check.min_shift_m` or more from `matched` and fitting
     /// `check.margin` more of the current points; the iterations of both.
     fn check_slide(
         &self,
         check: &SlideCheck,
         (reference, current): (&Reference, &ScanPoints),
+        grown: Option<&[Option<Line>]>,
         matched: MatchResult,
         last: &mut [Option<LastNearest>],
     ) -> MatchResult {
@@ -1342,7 +1357,7 @@ impl Lorentz {
         let p = matched.pose;
         let [ux, uy] = vote.direction;
         let start = Pose2::new(p.x + vote.shift_m * ux, p.y + vote.shift_m * uy, p.theta);
-        let lines = self.assist(reference, self.line_residuals_spread);
+        let lines = self.assist(grown, self.line_residuals_spread);
         let steps = self.first_max_steps.unwrap_or(self.max_steps);
         let again = self.passes(
             (&self.dense_sigmas_m, steps, self.crowd_ratio),
