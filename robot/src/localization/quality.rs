@@ -228,8 +228,9 @@ pub(super) struct SlideVote {
     pub recruits: usize,
 }
 
-/// The step between the shifts [`slide_vote`] weighs, metres: a tenth of the narrowest interval
-/// a point can be an inlier over (twice the trust rule's 5 cm).
+/// The step between the shifts [`slide_vote`] weighs, metres: a twentieth of the narrowest
+/// interval of shifts over which a point can be an inlier (twice the trust rule's 5 cm, for a
+/// surface square to the direction).
 const VOTE_STEP_M: f64 = 0.005;
 
 /// How the points off their surfaces vote for a shift of `pose` along its weakest direction.
