@@ -165,7 +165,7 @@ impl Moments {
 
 /// The principal direction of a covariance `[cxx, cxy, cyy]` by its angle, robust where the
 /// eigenvector formulas divide by 0.
-fn direction([cxx, cxy, cyy]: [f64; 3]) -> [f64; 2] {
+pub(super) fn direction([cxx, cxy, cyy]: [f64; 3]) -> [f64; 2] {
     let angle = 0.5 * (2.0 * cxy).atan2(cxx - cyy);
     [angle.cos(), angle.sin()]
 }

@@ -21,6 +21,7 @@
 //! [`MatchResult::converged`](super::MatchResult::converged).
 
 use super::kdtree::LastNearest;
+use super::lines::direction;
 use super::matcher::{Reference, solve3};
 use super::scan::turn_between;
 use crate::geometry::Pose2;
@@ -276,23 +277,14 @@ pub(super) fn slide_vote(
     if info == [0.0; 3] && near.is_empty() {
         return None;
     }
-    let [a, b, c] = info;
-    let root = ((a - c) * (a - c) + 4.0 * b * b).sqrt();
-    let small = 0.5 * (a + c - root);
-    let direction = if b.abs() > 1e-12 {
-        let v = [small - c, b];
-        let n = v[0].hypot(v[1]);
-        [v[0] / n, v[1] / n]
-    } else if a < c {
-        [1.0, 0.0]
-    } else {
-        [0.0, 1.0]
-    };
+    // Square to the information's principal direction: where it holds the answer least.
+    let [c, s] = direction(info);
+    let weakest = [-s, c];
     // Each voting point's interval of shifts.
     let intervals: Vec<(f64, f64)> = near
         .into_iter()
         .filter_map(|(r, n)| {
-            let k = n[0] * direction[0] + n[1] * direction[1];
+            let k = n[0] * weakest[0] + n[1] * weakest[1];
             (k.abs() >= 0.5).then(|| {
                 let (lo, hi) = ((-inlier_m - r) / k, (inlier_m - r) / k);
                 (lo.min(hi), lo.max(hi))
@@ -326,7 +318,7 @@ pub(super) fn slide_vote(
         }
     }
     Some(SlideVote {
-        direction,
+        direction: weakest,
         shift_m,
         recruits,
     })
