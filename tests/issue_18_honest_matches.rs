@@ -1183,17 +1183,41 @@ fn twin_matchers_shows_a_pair() {
 fn each_pair_side_by_side(
     matchers: [&robot::localization::Lorentz; 2],
     seeds: &[u64],
+    visit: impl FnMut(&CaseSet, &matchers::Case, [&robot::localization::MatchResult; 2]),
+) {
+    let taking = |name: &str| {
+        (!name.contains("1°")).then(|| Taking {
+            pairs: usize::MAX,
+            unchanged: name.contains("edmonton"),
+        })
+    };
+    each_pair_taken_side_by_side(matchers, (seeds, 150), taking, visit);
+}
+
+/// How a row takes part in [`each_pair_taken_side_by_side`]: its first `pairs` matched by both,
+/// and with `unchanged`, the two answers required to be the same.
+struct Taking {
+    pairs: usize,
+    unchanged: bool,
+}
+
+/// Two line-assisted Lorentzians side by side on the rows of `sets(n, seed)` that `taking`
+/// picks by name, for each of `seeds`: each pair's two answers handed to `visit`.
+fn each_pair_taken_side_by_side(
+    matchers: [&robot::localization::Lorentz; 2],
+    (seeds, n): (&[u64], usize),
+    taking: impl Fn(&str) -> Option<Taking>,
     mut visit: impl FnMut(&CaseSet, &matchers::Case, [&robot::localization::MatchResult; 2]),
 ) {
     for &seed in seeds {
-        for set in sets(150, seed)
-            .into_iter()
-            .filter(|s| !s.name.contains("1°"))
-        {
-            for c in &set.cases {
+        for set in sets(n, seed) {
+            let Some(Taking { pairs, unchanged }) = taking(&set.name) else {
+                continue;
+            };
+            for (k, c) in set.cases.iter().enumerate().take(pairs) {
                 let [a, b] = matchers.map(|m| m.match_scans(&c.reference, &c.current, c.guess));
-                if set.name.contains("edmonton") {
-                    assert_eq!(a, b, "seed {seed}: Edmonton's sparse scans are not changed");
+                if unchanged {
+                    assert_eq!(a, b, "seed {seed}, {} pair {k}: as before", set.name);
                 }
                 visit(&set, c, [&a, &b]);
             }
@@ -1916,46 +1940,21 @@ fn assert_fewer_searches(
     }
 }
 
-/// How a row takes part in [`side_by_side_held_out`]: its first `pairs` matched by both, their
-/// answers compared for success or required to be the same.
-struct Taking {
-    pairs: usize,
-    unchanged: bool,
-}
-
 /// `old` and `new` side by side on seeds 24 and 25 (held out from the seeds the slide check was
 /// chosen on, 300 pairs a row), on the rows `taking` picks by name: no right answer of `old`
-/// lost, the answers the same on the rows marked `unchanged`. The right answers of both on the
-/// other rows.
+/// lost, the answers the same on the rows marked `unchanged`. The right answers of both.
 fn side_by_side_held_out(
     old: &robot::localization::Lorentz,
     new: &robot::localization::Lorentz,
     taking: impl Fn(&str) -> Option<Taking>,
 ) -> (usize, usize) {
     let (mut before, mut after) = (0, 0);
-    for seed in [24, 25] {
-        for set in sets(300, seed) {
-            let Some(Taking { pairs, unchanged }) = taking(&set.name) else {
-                continue;
-            };
-            for (k, c) in set.cases.iter().enumerate().take(pairs) {
-                let a = old.match_scans(&c.reference, &c.current, c.guess);
-                let b = new.match_scans(&c.reference, &c.current, c.guess);
-                if unchanged {
-                    assert_eq!(a, b, "seed {seed}, {} pair {k}: as before", set.name);
-                    continue;
-                }
-                let (was, is) = (is_right(&set, c, &a), is_right(&set, c, &b));
-                assert!(
-                    !was || is,
-                    "seed {seed}, {} pair {k}: a right answer lost",
-                    set.name
-                );
-                before += usize::from(was);
-                after += usize::from(is);
-            }
-        }
-    }
+    each_pair_taken_side_by_side([old, new], (&[24, 25], 300), taking, |set, c, [a, b]| {
+        let (was, is) = (is_right(set, c, a), is_right(set, c, b));
+        assert!(!was || is, "{}: a right answer lost", set.name);
+        before += usize::from(was);
+        after += usize::from(is);
+    });
     (before, after)
 }
 
