@@ -1949,6 +1949,17 @@ fn assert_fewer_searches(
     }
 }
 
+/// Every pair (300) of the rows `rows` picks by name, for [`side_by_side_held_out`], their
+/// answers free to change.
+fn every_pair_of(rows: impl Fn(&str) -> bool) -> impl Fn(&str) -> Option<Taking> {
+    move |name| {
+        rows(name).then_some(Taking {
+            pairs: 300,
+            unchanged: false,
+        })
+    }
+}
+
 /// `old` and `new` side by side on `seeds` (held out from those the slide check was chosen on,
 /// 300 pairs a row), on the rows `taking` picks by name: no right answer of `old` lost, the
 /// answers the same on the rows marked `unchanged`. The right answers of both.
@@ -1986,12 +1997,7 @@ fn two_points_across_a_wall_can_undo_a_slide() {
     };
     let dense = |name: &str| name.starts_with("synthetic,") || name.contains("belgioioso");
     let new = Lorentz::with_lines();
-    let (before, after) = side_by_side_held_out([&five, &new], &[24, 25], |name| {
-        dense(name).then_some(Taking {
-            pairs: 300,
-            unchanged: false,
-        })
-    });
+    let (before, after) = side_by_side_held_out([&five, &new], &[24, 25], every_pair_of(dense));
     assert!(
         after >= before + 2,
         "right answers {after} asking two points, {before} asking five"
@@ -2053,12 +2059,8 @@ fn a_trusted_sparse_answer_slid_along_a_wall_is_checked() {
         ..Lorentz::with_lines()
     };
     let sparse = |name: &str| name.contains("1°") || name.contains("edmonton");
-    let (before, after) = side_by_side_held_out([&unchecked, &checked], &[24, 28], |name| {
-        sparse(name).then_some(Taking {
-            pairs: 300,
-            unchanged: false,
-        })
-    });
+    let rows = every_pair_of(sparse);
+    let (before, after) = side_by_side_held_out([&unchecked, &checked], &[24, 28], rows);
     assert!(
         after >= before + 2,
         "right answers {after} with the check, {before} without"
