@@ -269,7 +269,7 @@ pub struct SlideCheck {
 /// ([`Lorentz::sparse_slide_check`]) on their finished answer, the second match finished too:
 /// over seeds 1–10 and 51–60 +15 right answers on the 1° rows, two lost (pair 132 of seed 9
 /// and pair 137 of seed 57, 13–15 mm off before, now 6–18 cm along a wall where the answer
-/// fits 0.6–5 % more of the current points than the truth does); Edmonton's the same. A
+/// fits 0.5–5 % more of the current points than the truth does); Edmonton's the same. A
 /// margin of two percent kept 10 of the gains and lost one; checking the answer before the
 /// finish lost a third (the finish would have brought the first answer level). Held out,
 /// seeds 21–30 and 41–50: +8, none lost; seeds 61–80, run after the choice: +22 on the 1°
