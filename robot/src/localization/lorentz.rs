@@ -1136,11 +1136,7 @@ impl Lorentz {
         guess: Pose2,
         last: &mut [Option<LastNearest>],
     ) -> MatchResult {
-        let spread = if dense {
-            self.line_residuals_spread
-        } else {
-            self.sparse_line_residuals_spread
-        };
+        let spread = self.spread_for(dense);
         let first_spread = self.first_spread.filter(|_| dense && spread.is_some());
         let mut lines = self.assist(grown, first_spread.or(spread));
         let sigmas = self.schedule_for(dense);
@@ -1394,11 +1390,7 @@ impl Lorentz {
         if there.inliers <= matched.quality.inliers {
             return matched;
         }
-        let spread = if dense {
-            self.line_residuals_spread
-        } else {
-            self.sparse_line_residuals_spread
-        };
+        let spread = self.spread_for(dense);
         let lines = self.assist(grown, spread);
         let steps = self.first_max_steps.unwrap_or(self.max_steps);
         let crowd = self.crowd_ratio.filter(|_| dense);
@@ -1479,6 +1471,16 @@ impl Lorentz {
             &self.dense_sigmas_m
         } else {
             &self.sigmas_m
+        }
+    }
+
+    /// The share of the spread at which line residuals are taken, for a scan that is `dense`
+    /// or not: `line_residuals_spread` or `sparse_line_residuals_spread`.
+    fn spread_for(&self, dense: bool) -> Option<f64> {
+        if dense {
+            self.line_residuals_spread
+        } else {
+            self.sparse_line_residuals_spread
         }
     }
 
