@@ -31,7 +31,8 @@ pub const THESIS_SIGMAS: [f64; 3] = [2.0, 5.0, 0.5];
 pub struct Lorentz {
     /// σ of each pass, metres. Default: the thesis's 2 → 5 → 0.5 in centimetres (0.02, 0.05,
     /// 0.005 m); `cargo run --release --example sigma_sweep` shows why centimetres.
-    /// [`Lorentz::with_lines`] has [`SPARSE_SIGMAS`], the finish in place of the last pass.
+    /// [`Lorentz::with_lines`] has [`SPARSE_SIGMAS`]: a point-to-line round in place of the
+    /// first pass ([`Lorentz::sparse_start`]), the finish in place of the last.
     pub sigmas_m: Vec<f64>,
     /// λ at the start of each minimisation. Default 0.001.
     pub lambda0: f64,
@@ -205,6 +206,12 @@ pub struct Lorentz {
     /// current points. Not in the thesis; `None` (the default) keeps the match's answer, and
     /// [`Lorentz::with_lines`] has [`SPARSE_FINISH`].
     pub sparse_finish: Option<PointToLine>,
+    /// For sparse scans (not dense, as `dense_sigmas_m`): before the σ passes, these rounds
+    /// of point-to-line ICP run from the guess on the match's nearest-point cache, and the
+    /// passes start from their answer when it lies within their reach of the guess
+    /// ([`StartRounds`]). Not in the thesis; `None` (the default) starts the passes at the
+    /// guess, and [`Lorentz::with_lines`] has [`SPARSE_START`].
+    pub sparse_start: Option<StartRounds>,
     /// For dense scans (as `dense_sigmas_m`): a trusted answer is checked along the direction
     /// its inliers hold it least ([`SlideCheck`]). Not in the thesis; `None` (the default)
     /// leaves it out, and [`Lorentz::with_lines`] has [`SLIDE_CHECK`].
@@ -216,6 +223,53 @@ pub struct Lorentz {
     /// [`Lorentz::with_lines`] has [`SLIDE_CHECK`] here as well.
     pub sparse_slide_check: Option<SlideCheck>,
 }
+
+/// How a sparse match starts ([`Lorentz::sparse_start`]): `icp`'s rounds from the guess, and
+/// the σ passes from their answer when it moved no farther than `reach_m` and `reach_rad` from
+/// the guess, else from the guess (a round that carries the estimate farther paired most
+/// points with the wrong reference points).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct StartRounds {
+    /// The point-to-line ICP that runs, its `convergence.max_iterations` the rounds.
+    pub icp: PointToLine,
+    /// The farthest its answer may lie from the guess, metres …
+    pub reach_m: f64,
+    /// … and radians.
+    pub reach_rad: f64,
+}
+
+/// The start of a sparse match in [`Lorentz::with_lines`] ([`Lorentz::sparse_start`]): one
+/// round of point-to-line ICP (the finish's settings, [`SPARSE_FINISH`]) from the guess, kept
+/// within 30 cm and 0.1 rad (5.7°) of it; the σ passes then start at 5 cm
+/// ([`SPARSE_SIGMAS`]). The thesis's first pass, at σ 2 cm, had made most of a 1° match's
+/// correspondence searches: from a guess centimetres off, most residuals lie where the
+/// Lorentzian's slope is small, and its estimate crept towards the answer a little each search
+/// (the nearest-point searches of those first steps, which the last answer's cache cannot
+/// answer, were a third of a match's time). One point-to-line round jumps most of the way for
+/// one search, trimmed as point-to-line ICP trims (outliers stay out of it). Measured
+/// (`twin matchers --matchers lorentz-lines --seeds 10`, right answers of 3,000 a row, against
+/// the build before on the same seeds; 2026-11-30): on the tuning seeds 1–10 and 51–60 the 1°
+/// rows +3 −2, Edmonton +12 −11, the large guesses +2 −2; held out, 21–30 and 41–50, the 1°
+/// rows +4 −1, Edmonton +4 −5, the large guesses +5 −2; every dense row the same answers to
+/// the bit. Searches a pair (seeds 1–10) 16.6 → 11.8 on the 1° pairs without outliers, 21.5 →
+/// 14.1 with 20 %, 51.6 → 32.2 on Edmonton. Raced against `pl-icp` (`cargo bench --bench
+/// matcher_race`, in turn with the build before): the 1° pairs without outliers 1.72 → 1.43
+/// of its time, with 20 % 0.57 → 0.47, Edmonton 0.60 → 0.41, the large guesses 1.00 → 0.93.
+/// Tried in a first form (the 5 cm pass then stopped at the last pass's tight test, 1.46):
+/// two rounds were no faster (1.46–1.48) and the 2 cm pass kept after the round slower
+/// (1.51–1.54), both about as right; without the reach, 7 of the large guesses' answers of
+/// 6,000 were lost (the notebook, *2026-11-30*).
+pub const SPARSE_START: StartRounds = StartRounds {
+    icp: PointToLine {
+        convergence: Convergence {
+            max_iterations: 1,
+            ..SPARSE_FINISH.convergence
+        },
+        ..SPARSE_FINISH
+    },
+    reach_m: 0.3,
+    reach_rad: 0.1,
+};
 
 /// When [`Lorentz::slide_check`] matches again, and what it keeps: where the points that lie
 /// off their surfaces but across the direction a trusted answer's inliers hold it least (along
@@ -556,8 +610,11 @@ pub const SPARSE_EARLY_CONVERGENCE: Convergence = FIRST_PASS_CONVERGENCE;
 /// (+28 −11 over both), the large guesses 2,961 → 2,967 and 2,956 → 2,957, the twin's 1° pairs
 /// 2,998 → 2,998 and 2,994 → 2,993 without outliers, 2,980 → 2,981 and 2,990 → 2,991 with
 /// 20 %; the dense rows the same answers to the bit; searches a pair 20.0 → 18.2 on the 1°
-/// pairs without outliers, 58.2 → 54.0 on Edmonton.
-pub const SPARSE_SIGMAS: [f64; 2] = [0.02, 0.05];
+/// pairs without outliers, 58.2 → 54.0 on Edmonton. Since 2026-11-30 the 2 cm pass is gone
+/// too: a round of point-to-line ICP from the guess starts the match ([`SPARSE_START`]), and
+/// the 5 cm pass takes it on; restarts, the coarse search's starts and the slide check's second
+/// match run the 5 cm pass alone.
+pub const SPARSE_SIGMAS: [f64; 1] = [0.05];
 
 /// The second schedule of [`Lorentz::with_lines`]: σ 20 cm first, then 5 and 0.5 cm. At
 /// σ 2 cm a point farther than a few centimetres from its pair barely pulls, so from a guess
@@ -683,6 +740,7 @@ impl Lorentz {
             sigmas_m: SPARSE_SIGMAS.to_vec(),
             crowd_ratio: Some(CROWD_RATIO),
             sparse_finish: Some(SPARSE_FINISH),
+            sparse_start: Some(SPARSE_START),
             slide_check: Some(SLIDE_CHECK),
             sparse_slide_check: Some(SLIDE_CHECK),
             ..Lorentz::default()
@@ -1078,6 +1136,7 @@ impl Default for Lorentz {
             first_pass_convergence: None,
             sparse_early_convergence: None,
             sparse_finish: None,
+            sparse_start: None,
             slide_check: None,
             sparse_slide_check: None,
         }
@@ -1109,7 +1168,9 @@ impl ScanMatcher for Lorentz {
             .map(|params| lines_of(&reference.points.xy, params));
         let grown = grown.as_deref();
         let scans = (reference, current);
-        let matched = self.match_from(scans, grown, dense, guess, &mut last);
+        let (start, rounds) = self.start(scans, dense, guess, &mut last);
+        let mut matched = self.match_from(scans, grown, dense, start, &mut last);
+        matched.iterations += rounds;
         let matched = self.finished(scans, dense, matched, &mut last);
         let check = if dense {
             &self.slide_check
@@ -1124,6 +1185,24 @@ impl ScanMatcher for Lorentz {
 }
 
 impl Lorentz {
+    /// Where the σ passes start from `guess` ([`Lorentz::sparse_start`], on a sparse scan:
+    /// not `dense`), and the rounds that took.
+    fn start(
+        &self,
+        (reference, current): (&Reference, &ScanPoints),
+        dense: bool,
+        guess: Pose2,
+        last: &mut [Option<LastNearest>],
+    ) -> (Pose2, u32) {
+        let Some(start) = self.sparse_start.filter(|_| !dense) else {
+            return (guess, 0);
+        };
+        let (pose, rounds) = start.icp.refine(reference, current, guess, last);
+        let moved = guess.relative(&pose);
+        let near = moved.x.hypot(moved.y) <= start.reach_m && moved.theta.abs() <= start.reach_rad;
+        (if near { pose } else { guess }, rounds)
+    }
+
     /// The match from `guess`: the σ passes, and when their answer is loose or untrusted the
     /// wide schedule, the restarts and the coarse search's starts; `dense` as
     /// [`Lorentz::is_dense`] says of `current`, `last` as in [`Lorentz::passes`], `grown` the
