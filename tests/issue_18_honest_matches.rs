@@ -1867,6 +1867,40 @@ fn sparse_matches_start_with_a_point_to_line_round() {
     assert_fewer_searches(&rows, 1, (5, 4));
 }
 
+/// A start round that carries the estimate beyond its reach (`StartRounds::reach_m`, here 0)
+/// leaves the match at the guess: the same answers to the last bit as a matcher without the
+/// round, one search more each (the round's searches warmed the nearest-point cache, which
+/// answers exactly as the tree does); on dense scans the round never runs.
+#[test]
+fn a_start_round_out_of_reach_leaves_the_guess() {
+    use robot::localization::{Lorentz, SPARSE_START, StartRounds};
+    let unreachable = Lorentz {
+        sparse_start: Some(StartRounds {
+            reach_m: 0.0,
+            ..SPARSE_START
+        }),
+        ..Lorentz::with_lines()
+    };
+    let without = Lorentz {
+        sparse_start: None,
+        ..Lorentz::with_lines()
+    };
+    let mut sparse = 0;
+    for set in sets(150, 37) {
+        let is_sparse = set.name.contains("edmonton") || set.name.contains("1°");
+        for c in set.cases.iter().take(25) {
+            let [a, b] = [&without, &unreachable]
+                .map(|m| m.match_scans(&c.reference, &c.current, c.guess));
+            assert_eq!(a.pose, b.pose, "{}: the same answer", set.name);
+            assert_eq!(a.quality, b.quality, "{}: the same quality", set.name);
+            let more = u32::from(is_sparse);
+            assert_eq!(b.iterations, a.iterations + more, "{}: searches", set.name);
+            sparse += usize::from(is_sparse);
+        }
+    }
+    assert_eq!(sparse, 75, "Edmonton's and the two 1° rows' pairs");
+}
+
 /// The thesis's σ schedule, 2 → 5 → 0.5 cm, in metres: what a matcher without the sparse
 /// finish runs on sparse scans (`SPARSE_SIGMAS` leaves the last pass to the finish).
 fn thesis_sigmas() -> Vec<f64> {

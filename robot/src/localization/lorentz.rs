@@ -208,9 +208,11 @@ pub struct Lorentz {
     pub sparse_finish: Option<PointToLine>,
     /// For sparse scans (not dense, as `dense_sigmas_m`): before the σ passes, these rounds
     /// of point-to-line ICP run from the guess on the match's nearest-point cache, and the
-    /// passes start from their answer when it lies within their reach of the guess
-    /// ([`StartRounds`]). Not in the thesis; `None` (the default) starts the passes at the
-    /// guess, and [`Lorentz::with_lines`] has [`SPARSE_START`].
+    /// match goes on from their answer when it lies within their reach of the guess
+    /// ([`StartRounds`]): the σ passes start there, and the wide schedule, the restarts and
+    /// the coarse search, when they run, centre on it as they would on the guess. Not in the
+    /// thesis; `None` (the default) starts at the guess, and [`Lorentz::with_lines`] has
+    /// [`SPARSE_START`].
     pub sparse_start: Option<StartRounds>,
     /// For dense scans (as `dense_sigmas_m`): a trusted answer is checked along the direction
     /// its inliers hold it least ([`SlideCheck`]). Not in the thesis; `None` (the default)
