@@ -1889,8 +1889,8 @@ fn a_start_round_out_of_reach_leaves_the_guess() {
     for set in sets(150, 37) {
         let is_sparse = set.name.contains("edmonton") || set.name.contains("1°");
         for c in set.cases.iter().take(25) {
-            let [a, b] = [&without, &unreachable]
-                .map(|m| m.match_scans(&c.reference, &c.current, c.guess));
+            let [a, b] =
+                [&without, &unreachable].map(|m| m.match_scans(&c.reference, &c.current, c.guess));
             assert_eq!(a.pose, b.pose, "{}: the same answer", set.name);
             assert_eq!(a.quality, b.quality, "{}: the same quality", set.name);
             let more = u32::from(is_sparse);
