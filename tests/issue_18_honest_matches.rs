@@ -1888,6 +1888,11 @@ fn a_start_round_out_of_reach_leaves_the_guess() {
     let mut sparse = 0;
     for set in sets(150, 37) {
         let is_sparse = set.name.contains("edmonton") || set.name.contains("1°");
+        // The large guesses' row draws from several logs, sparse and dense.
+        let dense = set.name.starts_with("synthetic,") || set.name.contains("belgioioso");
+        if !is_sparse && !dense {
+            continue;
+        }
         for c in set.cases.iter().take(25) {
             let [a, b] =
                 [&without, &unreachable].map(|m| m.match_scans(&c.reference, &c.current, c.guess));
