@@ -775,7 +775,7 @@ fn the_second_polish_is_left_to_the_wide_schedule() {
     let mut rows: BTreeMap<String, ([usize; 2], usize, usize)> = BTreeMap::new();
     for seed in [37, 38] {
         for set in sets(150, seed) {
-            if !(set.name.contains("edmonton") || set.name.contains("1°")) {
+            if !sparse_row(&set.name) {
                 continue;
             }
             let (right, pairs, same) = rows.entry(set.name.clone()).or_default();
@@ -886,7 +886,7 @@ fn dense_scans_narrow_their_sigma_throughout() {
         for set in sets(300, seed) {
             let dense = beam_step(&set.cases[0].current.points())
                 .is_some_and(|step| step < 0.75f64.to_radians());
-            let sparse = set.name.contains("edmonton") || set.name.contains("1°");
+            let sparse = sparse_row(&set.name);
             assert_eq!(dense, !sparse, "{}", set.name);
             let looked_at = set.name.starts_with("synthetic,")
                 || set.name.contains("belgioioso")
@@ -1887,10 +1887,9 @@ fn a_start_round_out_of_reach_leaves_the_guess() {
     };
     let mut sparse = 0;
     for set in sets(150, 37) {
-        let is_sparse = set.name.contains("edmonton") || set.name.contains("1°");
+        let is_sparse = sparse_row(&set.name);
         // The large guesses' row draws from several logs, sparse and dense.
-        let dense = set.name.starts_with("synthetic,") || set.name.contains("belgioioso");
-        if !is_sparse && !dense {
+        if !is_sparse && !dense_row(&set.name) {
             continue;
         }
         for c in set.cases.iter().take(25) {
@@ -1926,8 +1925,8 @@ fn sparse_rows_side_by_side(
     let mut rows: BTreeMap<String, ([usize; 2], [u64; 2])> = BTreeMap::new();
     for seed in seeds {
         for set in sets(150, seed) {
-            let sparse = set.name.contains("edmonton") || set.name.contains("1°");
-            let dense = set.name.starts_with("synthetic,") || set.name.contains("belgioioso");
+            let sparse = sparse_row(&set.name);
+            let dense = dense_row(&set.name);
             for c in set.cases.iter().take(if sparse { 150 } else { 20 }) {
                 let answers = matchers.map(|m| m.match_scans(&c.reference, &c.current, c.guess));
                 if dense {
@@ -2014,6 +2013,18 @@ fn assert_fewer_searches(
     }
 }
 
+/// Whether the row named `name` holds sparse scans only (beams 1° apart: the twin's 1° rows
+/// and Edmonton's).
+fn sparse_row(name: &str) -> bool {
+    name.contains("1°") || name.contains("edmonton")
+}
+
+/// Whether the row named `name` holds dense scans only (beams 0.5° apart: the twin's standard
+/// rows and Belgioioso's; Freiburg 101's too, left out where a test names only these).
+fn dense_row(name: &str) -> bool {
+    name.starts_with("synthetic,") || name.contains("belgioioso")
+}
+
 /// Every pair (300) of the rows `rows` picks by name, for [`side_by_side_held_out`], their
 /// answers free to change.
 fn every_pair_of(rows: impl Fn(&str) -> bool) -> impl Fn(&str) -> Option<Taking> {
@@ -2060,9 +2071,8 @@ fn two_points_across_a_wall_can_undo_a_slide() {
         }),
         ..Lorentz::with_lines()
     };
-    let dense = |name: &str| name.starts_with("synthetic,") || name.contains("belgioioso");
     let new = Lorentz::with_lines();
-    let (before, after) = side_by_side_held_out([&five, &new], &[24, 25], every_pair_of(dense));
+    let (before, after) = side_by_side_held_out([&five, &new], &[24, 25], every_pair_of(dense_row));
     assert!(
         after >= before + 2,
         "right answers {after} asking two points, {before} asking five"
@@ -2092,7 +2102,7 @@ fn a_trusted_answer_slid_along_a_wall_is_checked() {
                 pairs: 300,
                 unchanged: false,
             })
-        } else if name.contains("1°") || name.contains("edmonton") {
+        } else if sparse_row(name) {
             Some(Taking {
                 pairs: 20,
                 unchanged: true,
@@ -2123,8 +2133,7 @@ fn a_trusted_sparse_answer_slid_along_a_wall_is_checked() {
         sparse_slide_check: None,
         ..Lorentz::with_lines()
     };
-    let sparse = |name: &str| name.contains("1°") || name.contains("edmonton");
-    let rows = every_pair_of(sparse);
+    let rows = every_pair_of(sparse_row);
     let (before, after) = side_by_side_held_out([&unchecked, &checked], &[24, 28], rows);
     assert!(
         after >= before + 2,
