@@ -3,8 +3,11 @@
 //! other, the order swapped from pair to pair and from round to round, and each matcher's time
 //! on a pair is its best of the rounds. A busy moment of the host then slows both alike, where
 //! `twin matchers`, which runs one matcher over a whole row and then the next, can hand it to
-//! one of them. Prints each row's median time a pair for both and their ratio. Each match
-//! prepares its reference, as in `twin matchers`.
+//! one of them. Prints each row's median time a pair for both and their ratio (the issue's
+//! figure), the ratio of their whole times over the row (what a log's user waits for: the slow
+//! pairs, restarts and all, weigh on it as they do not on the median) and the share of the
+//! pairs `lorentz-lines` matched sooner. Each match prepares its reference, as in `twin
+//! matchers`.
 //!
 //! `cargo bench --bench matcher_race` (`RACE_ROUNDS`, default 5, sets the rounds; `RACE_ROW`,
 //! a part of a row's name such as `1°, 0`, races that row alone)
@@ -36,7 +39,10 @@ fn main() {
         );
         std::process::exit(2);
     }
-    println!("| row | lorentz-lines | pl-icp | ratio |\n|---|---|---|---|");
+    println!(
+        "| row | lorentz-lines | pl-icp | ratio | whole row, ratio | pairs sooner |\n\
+         |---|---|---|---|---|---|"
+    );
     for set in raced {
         let mut best = vec![[f64::INFINITY; 2]; set.cases.len()];
         for round in 0..rounds {
@@ -58,12 +64,16 @@ fn main() {
             times[times.len() / 2]
         };
         let (ll, pl) = (median(0), median(1));
+        let whole = |k: usize| best.iter().map(|b| b[k]).sum::<f64>();
+        let sooner = best.iter().filter(|b| b[0] < b[1]).count();
         println!(
-            "| {} | {:.0} µs | {:.0} µs | {:.3} |",
+            "| {} | {:.0} µs | {:.0} µs | {:.3} | {:.3} | {:.2} |",
             set.name,
             ll,
             pl,
-            ll / pl
+            ll / pl,
+            whole(0) / whole(1),
+            sooner as f64 / best.len() as f64
         );
     }
 }
