@@ -90,7 +90,7 @@ impl Reference {
     }
 
     /// Whether the reference's beams lie 0.75° apart or more (a SICK in its 1° mode,
-    /// [`SPARSE_BEAM_STEP_RAD`](super::SPARSE_BEAM_STEP_RAD)): its surfaces are sampled
+    /// [`SPARSE_BEAM_STEP_RAD`]): its surfaces are sampled
     /// coarsely, and the trust rule asks a smaller share of inliers.
     pub fn is_sparse(&self) -> bool {
         self.sparse

@@ -1,0 +1,807 @@
+//! The Lorentzian scan matcher of the thesis (§3.4, App. F): the robust error
+//! `E = Σ ρσ(e_x,i) + ρσ(e_y,i)`, `ρσ(e) = log(1 + ½ (e/σ)²)`, minimised over `Φ = (θ, tx, ty)` by
+//! Newton–Levenberg–Marquardt, three times with σ = 2, 5 and 0.5 (§5.2); optionally with
+//! line-assisted association (§3.4.3).
+//!
+//! The constants' docs quote what each step measured when it was chosen. Edmonton's figures
+//! dated before 2026-11-28's beam-step fix of the CARMEN reader were measured with its 180
+//! readings spread over 180° instead of 1° apart ([`SPARSE_FINISH`] gives both).
+//!
+//! The folder: the matcher and a match's course from guess to answer here; the constants it is
+//! tuned with, each with what it measured ([`settings`]); the σ passes and the polish
+//! ([`passes`]); the Lorentzian's energy and its Newton–Levenberg–Marquardt steps ([`energy`]).
+
+mod energy;
+mod passes;
+mod settings;
+
+pub use settings::{
+    COARSE, CROWD_RATIO, DENSE_SIGMAS, EARLY_CONVERGENCE, FAR_SLIDE_M, FIRST_PASS_CONVERGENCE,
+    FIRST_PASS_ENOUGH, FIRST_PASS_SURFACE_POINTS, FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS,
+    LINE_RESIDUALS_SPREAD, POLISH_MORE, RESTARTS, SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE,
+    SPARSE_FINISH, SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_SIGMAS, SPARSE_START, SlideCheck,
+    StartRounds, THESIS_SIGMAS, WIDE_SIGMAS,
+};
+
+use super::correlative;
+use super::kdtree::LastNearest;
+use super::lines::{Line, LineParams, lines_of};
+use super::matcher::{Convergence, MatchResult, Reference, ScanMatcher};
+use super::plicp::PointToLine;
+use super::quality::{TrustRule, slide_vote};
+use super::scan::{SPARSE_BEAM_STEP_RAD, ScanPoints, beam_step_below};
+use crate::geometry::Pose2;
+use passes::Assist;
+use settings::{COARSE_MARGIN, WIDE_AFTER};
+
+/// The Lorentzian matcher.
+///
+/// Each σ pass alternates a correspondence search (every current point, moved by the estimate,
+/// paired with its nearest reference point — or a point on the reference's local line) with an
+/// NLM minimisation over those pairs, until a search no longer moves the estimate. The NLM is
+/// §3.4.2's: analytic gradient and Hessian (App. F), solve `(A + λI) δΦ = −B`, accept the step
+/// and divide λ by 10 when `E` falls, else multiply λ by 10 and retry; stop when `E` no longer
+/// falls noticeably or λ grows past `lambda_max`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Lorentz {
+    /// σ of each pass, metres. Default: the thesis's 2 → 5 → 0.5 in centimetres (0.02, 0.05,
+    /// 0.005 m); `cargo run --release --example sigma_sweep` shows why centimetres.
+    /// [`Lorentz::with_lines`] has [`SPARSE_SIGMAS`]: a point-to-line round in place of the
+    /// first pass ([`Lorentz::sparse_start`]), the finish in place of the last.
+    pub sigmas_m: Vec<f64>,
+    /// λ at the start of each minimisation. Default 0.001.
+    pub lambda0: f64,
+    /// Above this λ no better step exists. Default 1e12.
+    pub lambda_max: f64,
+    /// A minimisation stops when an accepted step lowers `E` by less than this per pair.
+    /// Default 1e-9.
+    pub energy_tolerance: f64,
+    /// Accepted NLM steps allowed per minimisation. Default 30.
+    pub max_steps: u32,
+    /// Accepted NLM steps allowed per minimisation in the first match from the guess (and a
+    /// loose answer's second match, [`Lorentz::first_spread`]), instead of `max_steps`; the
+    /// wide schedule, the restarts and the coarse search's starts keep `max_steps`. Not in the
+    /// thesis; `None` (the default) leaves `max_steps` everywhere, and
+    /// [`Lorentz::with_lines`] has [`FIRST_STEPS`].
+    pub first_max_steps: Option<u32>,
+    /// When a σ pass stops: a search that moves the estimate by under 0.01 mm and 0.0001°, or
+    /// 30 searches.
+    pub convergence: Convergence,
+    /// When a σ pass before the last stops, if not as `convergence` (which the last pass
+    /// keeps). Not in the thesis; `None` (the default) stops every pass alike, and
+    /// [`Lorentz::with_lines`] has [`EARLY_CONVERGENCE`].
+    pub early_convergence: Option<Convergence>,
+    /// Line-assisted association, when set.
+    pub lines: Option<LineParams>,
+    /// Leave out a current point whose nearest reference point is an
+    /// [edge](Reference::is_edge) of the reference scan, unless it is projected onto a line: it
+    /// lies where the reference did not look. Not in the thesis; without it a 0.5 m retreat down
+    /// the L-corridor comes out 0.1–0.4 m short. Default true.
+    pub drop_edge_pairs: bool,
+    /// For dense scans (as `dense_sigmas_m`), in every schedule but the wide one: of the pairs
+    /// that share a nearest reference point, those more than this many times farther from their
+    /// targets than the nearest of them, and farther than it by more than the pass's σ, are
+    /// left out of the search. Not in the thesis; `None` (the default) keeps them, and
+    /// [`Lorentz::with_lines`] has [`CROWD_RATIO`].
+    pub crowd_ratio: Option<f64>,
+    /// A last point-to-line stage ([`polish`](super::polish)) after the σ passes: at most this
+    /// many Gauss–Newton rounds on the current points within 5 cm of the reference's surfaces,
+    /// Cauchy-weighted at 1 cm. Not in the thesis; 0 (the default) leaves it out, and
+    /// [`Lorentz::with_lines`] has 5: the median error of synthetic pairs fell from 2.0 to
+    /// 1.9 mm without outliers and from 2.8 to 2.5 mm with 20 % (`twin matchers`), and to 1.7
+    /// and 1.9 mm once the reference's surfaces were fitted to their points' mean, skipping
+    /// outliers.
+    pub polish_rounds: usize,
+    /// For dense scans (as `dense_sigmas_m`), after every schedule but the wide one: the
+    /// polish goes on past `polish_rounds` while its last round still turned the estimate by
+    /// more than the first figure (radians), at most the second figure more rounds, and its
+    /// answer is kept unless the pose after `polish_rounds` fits more of the current points.
+    /// Not in the thesis; `None` (the default) stops at `polish_rounds`, and
+    /// [`Lorentz::with_lines`] has [`POLISH_MORE`].
+    pub polish_more: Option<(f64, usize)>,
+    /// With the polish: the answer from before the last σ pass is polished too, and kept when the
+    /// share of current points within 5 cm of the reference's surfaces is more than this above the
+    /// last pass's. Not in the thesis; `None` (the default) leaves it out, and
+    /// [`Lorentz::with_lines`] has 0.01. The last pass, at σ 5 mm, is what makes the synthetic
+    /// pairs precise; on Edmonton's sparse 1° scans it sometimes settles a few centimetres aside,
+    /// and over 2,400 pairs (`twin matchers`, seeds 1–6, 11, 12) keeping the earlier answer there
+    /// raised Edmonton's right answers from 0.934 to 0.945 (better on every seed), lost no
+    /// synthetic pair and left the Table 5.1 study as it was. Only where the crowd rule does not
+    /// run (the wide schedule; [`Lorentz::crowd_ratio`]): on dense scans with the rule, over seeds
+    /// 1–20 it changed no right answer and no Table 5.1 trial (about ten answers a seed by
+    /// millimetres) for 5–8 % of the time. Nor before the sparse finish
+    /// ([`Lorentz::sparse_finish`]): since the last pass of a sparse scan stopped at 3 mm (before
+    /// [`SPARSE_SIGMAS`] left that pass out) it no longer settled aside, the finish places the
+    /// answer, and the second polish and its judgement were a tenth of a 1° match's time for no
+    /// steady gain (over seeds 1–10 and held-out 21–30 of `twin matchers`, Edmonton −1 and ±0 right
+    /// answers, the twin's 1° rows +1 and −2 of 6,000 each).
+    pub before_last_margin: Option<f64>,
+    /// A second σ schedule, metres, tried from the guess when the first answer is not trusted
+    /// ([`TrustRule`]), or is trusted but fits loosely (under `wide_below` of the current
+    /// points inliers) after going more than 10 cm or 3° from the guess: the trusted answer
+    /// with the larger inlier share is kept. A trusted wide answer that fits fewer points than
+    /// an untrusted first one may have slid to a look-alike place, so the restarts still run
+    /// and it is kept only if none fits better. Not in the thesis; empty (the default) leaves
+    /// it out, and [`Lorentz::with_lines`] has [`WIDE_SIGMAS`].
+    pub wide_sigmas_m: Vec<f64>,
+    /// The inlier share under which a trusted answer also tries `wide_sigmas_m`. Default 0.7.
+    pub wide_below: f64,
+    /// Where to start again, relative to the guess, when the answer is still not trusted
+    /// ([`TrustRule`]) after `wide_sigmas_m`: the trusted answer with the most inliers is
+    /// kept. Not in the thesis; empty (the default) leaves it out, and
+    /// [`Lorentz::with_lines`] has `RESTARTS`.
+    pub restarts: Vec<Pose2>,
+    /// When the restarts (so only with some) gave no trusted answer either, the best starts of
+    /// a coarse correlative search over this window around the guess
+    /// ([`correlative::best_starts`]), and how many: of their trusted answers that fit clearly
+    /// more points than the first answer (`COARSE_MARGIN`), the one with the most inliers is
+    /// kept. Not in the thesis; `None` (the default) leaves it out, and
+    /// [`Lorentz::with_lines`] has [`COARSE`].
+    pub coarse: Option<(correlative::Window, usize)>,
+    /// With `coarse`: a trusted answer that lies farther than this from the guess, metres, is
+    /// checked against the match from the coarse search's best start, which replaces it when
+    /// trusted and fitting `COARSE_MARGIN` more of the current points: a match that slid a
+    /// corridor's length along may have found a look-alike place. Not in the thesis; `None`
+    /// (the default) leaves it out, and [`Lorentz::with_lines`] has [`FAR_SLIDE_M`].
+    pub far_slide_m: Option<f64>,
+    /// The σ schedule, metres, for scans whose beams lie closer than `dense_below_rad`
+    /// (measured on the current scan, [`beam_step`](super::beam_step)) instead of `sigmas_m`.
+    /// Not in the thesis; empty (the default) leaves it out, and [`Lorentz::with_lines`] has
+    /// [`DENSE_SIGMAS`].
+    pub dense_sigmas_m: Vec<f64>,
+    /// The angle between neighbouring beams under which a scan counts as dense, radians.
+    /// [`Lorentz::with_lines`]: 0.75°, between the 0.5° of the LMS at 361 beams and the 1° of
+    /// 180-beam scans.
+    pub dense_below_rad: f64,
+    /// Point-to-line residuals inside the Lorentzian, for dense scans (as `dense_sigmas_m`)
+    /// with line-assisted association: in a search whose pairs projected inside a reference
+    /// line have normals spread enough — the smaller eigenvalue of their `Σ n nᵀ` at least this
+    /// share of the larger — such a pair's error is its distance to the line alone,
+    /// `ρσ(n · e)`, so a point may slide along its wall instead of being held to its
+    /// projection; the other pairs, and every pair of a search whose lines mostly run one way
+    /// (a corridor, which would leave the estimate free along it), keep the product form, and
+    /// so do the restarts and the coarse search's starts (away from the guess, a pair free to
+    /// slide can settle in a look-alike place the trust rule accepts). With `first_spread` the
+    /// first match from the guess asks less of the spread. Not in the thesis; `None` (the
+    /// default) leaves it out, and [`Lorentz::with_lines`] has [`LINE_RESIDUALS_SPREAD`].
+    pub line_residuals_spread: Option<f64>,
+    /// For sparse scans (not dense, as `dense_sigmas_m`): as `line_residuals_spread`, the share
+    /// of the larger eigenvalue of the line normals' `Σ n nᵀ` the smaller must reach for a
+    /// search to count its line pairs' distances to their lines alone; restarts and the coarse
+    /// search's starts keep the product form there too. Not in the thesis; `None` (the
+    /// default) keeps the product form on sparse scans, and [`Lorentz::with_lines`] has
+    /// [`SPARSE_LINE_RESIDUALS_SPREAD`].
+    pub sparse_line_residuals_spread: Option<f64>,
+    /// With `line_residuals_spread`: the share of the larger eigenvalue the smaller must reach
+    /// in the first match from the guess, instead of `line_residuals_spread`'s. An answer of
+    /// that match that fits loosely (under `wide_below` of the current points inliers: the
+    /// scans overlap little, or one wall alone holds them) is matched again from the guess
+    /// with `line_residuals_spread`, and that answer is kept when it is trusted and fits no
+    /// fewer than [`FIRST_SPREAD_MARGIN`] of the current points less. Not in the thesis; `None`
+    /// (the default) asks `line_residuals_spread` of every search, and
+    /// [`Lorentz::with_lines`] has [`FIRST_SPREAD`].
+    pub first_spread: Option<f64>,
+    /// For dense scans (as `dense_sigmas_m`), in every schedule but the wide one: when, in the
+    /// last search of the first σ pass, at least this share (`.1`) of the current points were
+    /// paired within this distance (`.0`, metres) of their targets, the narrower passes are
+    /// left out and the polish finishes the answer. Not in the thesis; `None` (the default)
+    /// runs every pass, and [`Lorentz::with_lines`] has [`FIRST_PASS_ENOUGH`].
+    pub first_pass_enough: Option<(f64, f64)>,
+    /// End a σ pass when a search brings the estimate back to within `convergence` (or
+    /// `early_convergence`) of where it was two searches before: the searches alternate
+    /// between two sets of pairs, and the estimate between two poses, so no later search would
+    /// settle it (it would run to the cap of searches and stop on one of the two). Not in the
+    /// thesis; false (the default) runs such a pass to its cap, and [`Lorentz::with_lines`]
+    /// stops it.
+    pub stop_on_cycles: bool,
+    /// For dense scans (as `dense_sigmas_m`), in the first σ pass of every schedule but the
+    /// wide one: a pair that no reference line holds (none grew at its nearest reference point,
+    /// or the current point projects past its ends) is held instead to the reference's surface
+    /// at that point, the line the trust rule measures against, when the surface was fitted to
+    /// at least this many points (a straight piece of it) and the projection falls within its
+    /// reach: its target is the projection, and where the search counts distances to lines
+    /// ([`Lorentz::line_residuals_spread`]) it counts its distance to that line alone. Not in
+    /// the thesis; `None` (the default) leaves such pairs to their nearest points, and
+    /// [`Lorentz::with_lines`] has [`FIRST_PASS_SURFACE_POINTS`].
+    pub first_pass_surfaces: Option<usize>,
+    /// For dense scans (as `dense_sigmas_m`), in every schedule but the wide one: when the
+    /// first σ pass stops, instead of `early_convergence`, when narrower passes follow it. Not
+    /// in the thesis; `None` (the default) stops it as the other passes before the last, and
+    /// [`Lorentz::with_lines`] has [`FIRST_PASS_CONVERGENCE`].
+    pub first_pass_convergence: Option<Convergence>,
+    /// For sparse scans, in the schedule the sparse finish follows (`sparse_finish`): when
+    /// every σ pass stops, the last included, instead of `early_convergence` and
+    /// `convergence`; the finish takes the answer on. Not in the thesis; `None` (the default)
+    /// stops them as the other schedules' passes, and [`Lorentz::with_lines`] has
+    /// [`SPARSE_EARLY_CONVERGENCE`].
+    pub sparse_early_convergence: Option<Convergence>,
+    /// For sparse scans (not dense, as `dense_sigmas_m`): when the match has its answer, this
+    /// point-to-line ICP ([`PointToLine`]) runs from it on the match's nearest-point cache, and
+    /// its answer replaces the match's when the trust rule trusts it and it fits no fewer of the
+    /// current points. Not in the thesis; `None` (the default) keeps the match's answer, and
+    /// [`Lorentz::with_lines`] has [`SPARSE_FINISH`].
+    pub sparse_finish: Option<PointToLine>,
+    /// For sparse scans (not dense, as `dense_sigmas_m`): before the σ passes, these rounds
+    /// of point-to-line ICP run from the guess on the match's nearest-point cache, and the
+    /// match goes on from their answer when it lies within their reach of the guess
+    /// ([`StartRounds`]): the σ passes start there, and the wide schedule, the restarts and
+    /// the coarse search, when they run, centre on it as they would on the guess. Not in the
+    /// thesis; `None` (the default) starts at the guess, and [`Lorentz::with_lines`] has
+    /// [`SPARSE_START`].
+    pub sparse_start: Option<StartRounds>,
+    /// For dense scans (as `dense_sigmas_m`): a trusted answer is checked along the direction
+    /// its inliers hold it least ([`SlideCheck`]). Not in the thesis; `None` (the default)
+    /// leaves it out, and [`Lorentz::with_lines`] has [`SLIDE_CHECK`].
+    pub slide_check: Option<SlideCheck>,
+    /// For sparse scans (not dense, as `dense_sigmas_m`): as `slide_check`, on the answer
+    /// `sparse_finish` has finished; the second match takes a sparse match's schedule,
+    /// `sparse_line_residuals_spread` and no crowd rule, and is finished too before the two are
+    /// weighed. Not in the thesis; `None` (the default) leaves it out, and
+    /// [`Lorentz::with_lines`] has [`SLIDE_CHECK`] here as well.
+    pub sparse_slide_check: Option<SlideCheck>,
+}
+
+impl Lorentz {
+    /// The unit in which the thesis's σ values work for this laser: centimetres.
+    pub const SIGMA_UNIT_M: f64 = 0.01;
+
+    /// The thesis's schedule with σ counted in `unit_m` metres.
+    pub fn with_sigma_unit(unit_m: f64) -> Self {
+        Lorentz {
+            sigmas_m: THESIS_SIGMAS.iter().map(|s| s * unit_m).collect(),
+            ..Lorentz::default()
+        }
+    }
+
+    /// The default matcher with line-assisted association.
+    pub fn with_lines() -> Self {
+        Lorentz {
+            lines: Some(LineParams::default()),
+            polish_rounds: 5,
+            polish_more: Some(POLISH_MORE),
+            before_last_margin: Some(0.01),
+            wide_sigmas_m: WIDE_SIGMAS.to_vec(),
+            restarts: RESTARTS.to_vec(),
+            coarse: Some(COARSE),
+            far_slide_m: Some(FAR_SLIDE_M),
+            dense_sigmas_m: DENSE_SIGMAS.to_vec(),
+            dense_below_rad: SPARSE_BEAM_STEP_RAD,
+            line_residuals_spread: Some(LINE_RESIDUALS_SPREAD),
+            sparse_line_residuals_spread: Some(SPARSE_LINE_RESIDUALS_SPREAD),
+            first_spread: Some(FIRST_SPREAD),
+            first_max_steps: Some(FIRST_STEPS),
+            first_pass_enough: Some(FIRST_PASS_ENOUGH),
+            stop_on_cycles: true,
+            first_pass_surfaces: Some(FIRST_PASS_SURFACE_POINTS),
+            early_convergence: Some(EARLY_CONVERGENCE),
+            first_pass_convergence: Some(FIRST_PASS_CONVERGENCE),
+            sparse_early_convergence: Some(SPARSE_EARLY_CONVERGENCE),
+            sigmas_m: SPARSE_SIGMAS.to_vec(),
+            crowd_ratio: Some(CROWD_RATIO),
+            sparse_finish: Some(SPARSE_FINISH),
+            sparse_start: Some(SPARSE_START),
+            slide_check: Some(SLIDE_CHECK),
+            sparse_slide_check: Some(SLIDE_CHECK),
+            ..Lorentz::default()
+        }
+    }
+}
+
+impl Default for Lorentz {
+    fn default() -> Self {
+        Lorentz {
+            sigmas_m: THESIS_SIGMAS
+                .iter()
+                .map(|s| s * Lorentz::SIGMA_UNIT_M)
+                .collect(),
+            lambda0: 0.001,
+            lambda_max: 1e12,
+            energy_tolerance: 1e-9,
+            max_steps: 30,
+            convergence: Convergence {
+                translation_m: 1e-5,
+                rotation_rad: 1e-4_f64.to_radians(),
+                max_iterations: 30,
+            },
+            early_convergence: None,
+            lines: None,
+            drop_edge_pairs: true,
+            crowd_ratio: None,
+            polish_rounds: 0,
+            polish_more: None,
+            before_last_margin: None,
+            wide_sigmas_m: Vec::new(),
+            wide_below: 0.7,
+            restarts: Vec::new(),
+            coarse: None,
+            far_slide_m: None,
+            dense_sigmas_m: Vec::new(),
+            dense_below_rad: 0.0,
+            line_residuals_spread: None,
+            sparse_line_residuals_spread: None,
+            first_spread: None,
+            first_max_steps: None,
+            first_pass_enough: None,
+            stop_on_cycles: false,
+            first_pass_surfaces: None,
+            first_pass_convergence: None,
+            sparse_early_convergence: None,
+            sparse_finish: None,
+            sparse_start: None,
+            slide_check: None,
+            sparse_slide_check: None,
+        }
+    }
+}
+
+impl ScanMatcher for Lorentz {
+    fn name(&self) -> &'static str {
+        if self.lines.is_some() {
+            "lorentz-lines"
+        } else {
+            "lorentz"
+        }
+    }
+
+    fn align_plausible(
+        &self,
+        reference: &Reference,
+        current: &ScanPoints,
+        guess: Pose2,
+    ) -> MatchResult {
+        // Each current point's last nearest reference point, for every search of the match.
+        let mut last = vec![None; current.len()];
+        let dense = self.is_dense(current);
+        // The reference's lines, grown once for every match from here.
+        let grown = self
+            .lines
+            .as_ref()
+            .map(|params| lines_of(&reference.points.xy, params));
+        let grown = grown.as_deref();
+        let scans = (reference, current);
+        let (start, rounds) = self.start(scans, dense, guess, &mut last);
+        let mut matched = self.match_from(scans, grown, dense, start, &mut last);
+        matched.iterations += rounds;
+        let matched = self.finished(scans, dense, matched, &mut last);
+        let check = if dense {
+            &self.slide_check
+        } else {
+            &self.sparse_slide_check
+        };
+        match check {
+            Some(check) => self.check_slide(check, scans, grown, dense, matched, &mut last),
+            None => matched,
+        }
+    }
+}
+
+impl Lorentz {
+    /// Where the σ passes start from `guess` ([`Lorentz::sparse_start`], on a sparse scan:
+    /// not `dense`), and the rounds that took.
+    fn start(
+        &self,
+        (reference, current): (&Reference, &ScanPoints),
+        dense: bool,
+        guess: Pose2,
+        last: &mut [Option<LastNearest>],
+    ) -> (Pose2, u32) {
+        let Some(start) = self.sparse_start.filter(|_| !dense) else {
+            return (guess, 0);
+        };
+        let (pose, rounds) = start.icp.refine(reference, current, guess, last);
+        let moved = guess.relative(&pose);
+        let near = moved.x.hypot(moved.y) <= start.reach_m && moved.theta.abs() <= start.reach_rad;
+        (if near { pose } else { guess }, rounds)
+    }
+
+    /// The match from `guess`: the σ passes, and when their answer is loose or untrusted the
+    /// wide schedule, the restarts and the coarse search's starts; `dense` as
+    /// [`Lorentz::is_dense`] says of `current`, `last` as in [`Lorentz::passes`], `grown` the
+    /// reference's lines ([`lines_of`]) when the matcher has `lines`.
+    fn match_from(
+        &self,
+        (reference, current): (&Reference, &ScanPoints),
+        grown: Option<&[Option<Line>]>,
+        dense: bool,
+        guess: Pose2,
+        last: &mut [Option<LastNearest>],
+    ) -> MatchResult {
+        let spread = self.spread_for(dense);
+        let first_spread = self.first_spread.filter(|_| dense && spread.is_some());
+        let mut lines = self.assist(grown, first_spread.or(spread));
+        let sigmas = self.schedule_for(dense);
+        let crowd = self.crowd_ratio.filter(|_| dense);
+        let first_steps = self.first_max_steps.unwrap_or(self.max_steps);
+        let scans = (reference, current);
+        // Every answer is judged by `passes`, by the rule `align` applies, so it carries its
+        // quality and `align` does not judge it again.
+        let mut first = self.passes(
+            (sigmas, first_steps, crowd),
+            scans,
+            lines.as_ref(),
+            guess,
+            last,
+        );
+        let more = !self.restarts.is_empty() || !self.wide_sigmas_m.is_empty();
+        if !more && first_spread.is_none() {
+            return first;
+        }
+        let rule = TrustRule::default();
+        // From here on every match asks the scan's own share of the spread
+        // (`line_residuals_spread`, or `sparse_line_residuals_spread` on a sparse scan). A loose
+        // first answer is matched again so, and that answer is kept unless the first fits
+        // clearly more points.
+        if let Some(assist) = &mut lines {
+            assist.spread = spread;
+        }
+        if first_spread.is_some() && first.quality.inlier_share < self.wide_below {
+            let again = self.passes(
+                (sigmas, first_steps, crowd),
+                scans,
+                lines.as_ref(),
+                guess,
+                last,
+            );
+            let iterations = first.iterations + again.iterations;
+            if rule.trusts(&again.quality)
+                && again.quality.inlier_share + FIRST_SPREAD_MARGIN >= first.quality.inlier_share
+            {
+                first = again;
+            }
+            first.iterations = iterations;
+        }
+        if !more {
+            return first;
+        }
+        let trusted = rule.trusts(&first.quality);
+        let travelled = guess.relative(&first.pose);
+        let far =
+            travelled.x.hypot(travelled.y) > WIDE_AFTER.0 || travelled.theta.abs() > WIDE_AFTER.1;
+        let loose = first.quality.inlier_share < self.wide_below;
+        // The trusted answer with the most inliers so far, besides `first`.
+        let mut best: Option<(MatchResult, f64)> = None;
+        let mut iterations = first.iterations;
+        if !self.wide_sigmas_m.is_empty() && (!trusted || (loose && far)) {
+            let wide = self.passes(
+                (&self.wide_sigmas_m, self.max_steps, None),
+                scans,
+                lines.as_ref(),
+                guess,
+                last,
+            );
+            iterations += wide.iterations;
+            if rule.trusts(&wide.quality) {
+                let share = wide.quality.inlier_share;
+                if share > first.quality.inlier_share {
+                    first = wide;
+                } else if !trusted {
+                    // Trusted, but fewer points fit it than fit the untrusted first answer:
+                    // the wide pass may have slid to a look-alike place, so the restarts
+                    // still run and it is kept only if none fits better.
+                    best = Some((wide, share));
+                }
+            }
+        }
+        first.iterations = iterations;
+        if self.restarts.is_empty() || rule.trusts(&first.quality) {
+            let chosen = best.map_or(first, |(result, _)| MatchResult {
+                iterations,
+                ..result
+            });
+            // Trusted far from the guess: checked against the coarse search's best start, its
+            // pairs held to their projections as the restarts' are (below).
+            let travelled = guess.relative(&chosen.pose);
+            let slid = rule.trusts(&chosen.quality)
+                && self
+                    .far_slide_m
+                    .is_some_and(|far| travelled.x.hypot(travelled.y) > far);
+            let Some((window, _)) = self.coarse.as_ref().filter(|_| slid) else {
+                return chosen;
+            };
+            if let Some(assist) = &mut lines {
+                assist.spread = None;
+            }
+            let floor = chosen.quality.inlier_share + COARSE_MARGIN;
+            let (found, more) = self.match_coarse_starts(
+                (sigmas, crowd),
+                scans,
+                lines.as_ref(),
+                (guess, window, 1),
+                floor,
+                last,
+            );
+            let iterations = chosen.iterations + more;
+            return MatchResult {
+                iterations,
+                ..found.unwrap_or(chosen)
+            };
+        }
+        // Not trusted: start again from guesses around this one, and keep the trusted answer
+        // that fits best (most inliers), if any. Started away from the guess, the pairs are
+        // held to their projections (the product form): free to slide along the walls, a far
+        // start can settle in a look-alike place that the trust rule accepts.
+        if let Some(assist) = &mut lines {
+            assist.spread = None;
+        }
+        let mut keep = |result: MatchResult, floor: f64, best: &mut Option<(MatchResult, f64)>| {
+            iterations += result.iterations;
+            let share = result.quality.inlier_share;
+            if rule.trusts(&result.quality)
+                && share > floor
+                && best.as_ref().is_none_or(|(_, s)| share > *s)
+            {
+                *best = Some((result, share));
+            }
+        };
+        for offset in &self.restarts {
+            let start = guess.compose(offset);
+            let result = self.passes(
+                (sigmas, self.max_steps, crowd),
+                scans,
+                lines.as_ref(),
+                start,
+                last,
+            );
+            keep(result, f64::NEG_INFINITY, &mut best);
+        }
+        // Still nothing: the coarse search's starts, whose answers must fit clearly more
+        // points than the first.
+        if best.is_none()
+            && let Some((window, count)) = &self.coarse
+        {
+            let floor = first.quality.inlier_share + COARSE_MARGIN;
+            let (found, more) = self.match_coarse_starts(
+                (sigmas, crowd),
+                scans,
+                lines.as_ref(),
+                (guess, window, *count),
+                floor,
+                last,
+            );
+            iterations += more;
+            best = found.map(|result| {
+                let share = result.quality.inlier_share;
+                (result, share)
+            });
+        }
+        let mut chosen = best.map_or(first, |(result, _)| result);
+        chosen.iterations = iterations;
+        chosen
+    }
+
+    /// The σ passes of `sigmas` from each of the `count` best starts of the coarse search over
+    /// `window` around `guess` ([`correlative::best_starts`]): of their trusted answers that
+    /// fit more than `floor` of the current points, the one that fits most, and the iterations
+    /// of all of them.
+    fn match_coarse_starts(
+        &self,
+        (sigmas, crowd): (&[f64], Option<f64>),
+        (reference, current): (&Reference, &ScanPoints),
+        lines: Option<&Assist>,
+        (guess, window, count): (Pose2, &correlative::Window, usize),
+        floor: f64,
+        last: &mut [Option<LastNearest>],
+    ) -> (Option<MatchResult>, u32) {
+        let rule = TrustRule::default();
+        let (from, to) = (&reference.points.xy, &current.xy);
+        let mut iterations = 0;
+        let mut best: Option<MatchResult> = None;
+        for start in correlative::best_starts(from, to, guess, window, (count, 3)) {
+            let result = self.passes(
+                (sigmas, self.max_steps, crowd),
+                (reference, current),
+                lines,
+                start,
+                last,
+            );
+            iterations += result.iterations;
+            let share = result.quality.inlier_share;
+            if rule.trusts(&result.quality)
+                && share > floor
+                && best.as_ref().is_none_or(|b| share > b.quality.inlier_share)
+            {
+                best = Some(result);
+            }
+        }
+        (best, iterations)
+    }
+
+    /// Line-assisted association on the reference's lines `grown`, their residuals taken when
+    /// the normals spread by `spread`; `None` without `lines`.
+    fn assist<'a>(
+        &self,
+        grown: Option<&'a [Option<Line>]>,
+        spread: Option<f64>,
+    ) -> Option<Assist<'a>> {
+        let (params, lines) = self.lines.as_ref().zip(grown)?;
+        Some(Assist {
+            lines,
+            margin: params.end_margin_m,
+            spread,
+        })
+    }
+
+    /// The match's answer `matched` (finished, on a sparse scan), checked as `check` says
+    /// ([`SlideCheck`]): where the points off their surfaces across its weakest direction would
+    /// have it, and where the trust rule finds more inliers than at `matched`, the σ passes of
+    /// a `dense` or sparse scan (on the lines `grown`) from there, finished as `matched` was,
+    /// their answer kept when trusted, `check.min_shift_m` or more from `matched` and fitting
+    /// `check.margin` more of the current points; the iterations of both.
+    fn check_slide(
+        &self,
+        check: &SlideCheck,
+        (reference, current): (&Reference, &ScanPoints),
+        grown: Option<&[Option<Line>]>,
+        dense: bool,
+        matched: MatchResult,
+        last: &mut [Option<LastNearest>],
+    ) -> MatchResult {
+        let rule = TrustRule::default();
+        if !rule.trusts(&matched.quality) {
+            return matched;
+        }
+        let vote = slide_vote(
+            reference,
+            &current.xy,
+            &matched.pose,
+            Some(&mut *last),
+            rule.inlier_m,
+            (check.min_shift_m, check.reach_m),
+        );
+        let Some(vote) = vote.filter(|v| v.recruits >= check.min_gain) else {
+            return matched;
+        };
+        let p = matched.pose;
+        let [ux, uy] = vote.direction;
+        let start = Pose2::new(p.x + vote.shift_m * ux, p.y + vote.shift_m * uy, p.theta);
+        // The vote counts only the points it recruits; the judgement there weighs them against
+        // the points the shift carries off their surfaces (or onto others), before a match.
+        let there = rule.assess_near(reference, &current.xy, &start, Some(&mut *last));
+        if there.inliers <= matched.quality.inliers {
+            return matched;
+        }
+        let spread = self.spread_for(dense);
+        let lines = self.assist(grown, spread);
+        let steps = self.first_max_steps.unwrap_or(self.max_steps);
+        let crowd = self.crowd_ratio.filter(|_| dense);
+        let again = self.passes(
+            (self.schedule_for(dense), steps, crowd),
+            (reference, current),
+            lines.as_ref(),
+            start,
+            last,
+        );
+        let again = self.finished((reference, current), dense, again, last);
+        let iterations = matched.iterations + again.iterations;
+        let fits_more = again.quality.inlier_share > matched.quality.inlier_share + check.margin;
+        let moved = matched.pose.relative(&again.pose);
+        let slid_back = moved.x.hypot(moved.y) >= check.min_shift_m;
+        let kept = if rule.trusts(&again.quality) && fits_more && slid_back {
+            again
+        } else {
+            matched
+        };
+        MatchResult { iterations, ..kept }
+    }
+
+    /// `matched`, finished as [`Lorentz::finish`] says on a sparse scan (not `dense`) when the
+    /// matcher has a `sparse_finish`, else as it is.
+    fn finished(
+        &self,
+        scans: (&Reference, &ScanPoints),
+        dense: bool,
+        matched: MatchResult,
+        last: &mut [Option<LastNearest>],
+    ) -> MatchResult {
+        match self.sparse_finish {
+            Some(finish) if !dense => self.finish(&finish, scans, matched, last),
+            _ => matched,
+        }
+    }
+
+    /// The match's answer `matched`, finished by point-to-line ICP `finish` from it
+    /// ([`Lorentz::sparse_finish`]) on `last`'s nearest points: the finish's answer when the
+    /// trust rule trusts it and it fits no fewer of the current points, else `matched`;
+    /// the iterations of both.
+    fn finish(
+        &self,
+        finish: &PointToLine,
+        (reference, current): (&Reference, &ScanPoints),
+        matched: MatchResult,
+        last: &mut [Option<LastNearest>],
+    ) -> MatchResult {
+        let (pose, steps) = finish.refine(reference, current, matched.pose, last);
+        let iterations = matched.iterations + steps;
+        let rule = TrustRule::default();
+        let quality = rule.assess_near(reference, &current.xy, &pose, Some(last));
+        if rule.trusts(&quality) && quality.inlier_share >= matched.quality.inlier_share {
+            MatchResult {
+                pose,
+                quality,
+                iterations,
+                ..matched
+            }
+        } else {
+            MatchResult {
+                iterations,
+                ..matched
+            }
+        }
+    }
+
+    /// The σ schedule for `current`: `dense_sigmas_m` when it has one and the scan's beams lie
+    /// closer than `dense_below_rad`, else `sigmas_m`.
+    pub fn schedule(&self, current: &ScanPoints) -> &[f64] {
+        self.schedule_for(self.is_dense(current))
+    }
+
+    /// The σ schedule for a scan that is `dense` ([`Lorentz::is_dense`]) or not.
+    fn schedule_for(&self, dense: bool) -> &[f64] {
+        if dense {
+            &self.dense_sigmas_m
+        } else {
+            &self.sigmas_m
+        }
+    }
+
+    /// The share of the spread at which line residuals are taken, for a scan that is `dense`
+    /// or not: `line_residuals_spread` or `sparse_line_residuals_spread`.
+    fn spread_for(&self, dense: bool) -> Option<f64> {
+        if dense {
+            self.line_residuals_spread
+        } else {
+            self.sparse_line_residuals_spread
+        }
+    }
+
+    /// Whether `current`'s beams lie closer than `dense_below_rad` and the matcher has a
+    /// schedule for such scans.
+    fn is_dense(&self, current: &ScanPoints) -> bool {
+        !self.dense_sigmas_m.is_empty()
+            && beam_step_below(current, self.dense_below_rad) == Some(true)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::localization::{RangeScan, beam_step};
+
+    /// A scan's beam step is read from its points: 0.5° for 361 beams over 180°, also with
+    /// beams missing (no return) and ranges jumping from beam to beam; none without two
+    /// neighbouring beams; and the schedule follows it (the sparse one without the thesis's
+    /// last pass, which the finish replaces).
+    #[test]
+    fn the_beam_step_picks_the_schedule() {
+        let scan = |beams: usize, fov_deg: f64, ranges: &dyn Fn(usize) -> f64| {
+            let inc = fov_deg.to_radians() / (beams - 1) as f64;
+            let ranges = (0..beams).map(ranges).collect();
+            RangeScan::new(-fov_deg.to_radians() / 2.0, inc, 30.0, ranges).points()
+        };
+        let lms = scan(361, 180.0, &|k| {
+            if k % 7 == 3 {
+                f64::NAN
+            } else {
+                2.0 + (k % 5) as f64
+            }
+        });
+        let step = beam_step(&lms).expect("neighbours");
+        assert!(
+            (step.to_degrees() - 0.5).abs() < 1e-9,
+            "{}",
+            step.to_degrees()
+        );
+        let sparse = scan(181, 180.0, &|_| 4.0);
+        assert!((beam_step(&sparse).expect("neighbours").to_degrees() - 1.0).abs() < 1e-9);
+        let lonely = scan(361, 180.0, &|k| if k % 2 == 0 { 3.0 } else { f64::NAN });
+        assert_eq!(beam_step(&lonely), None);
+        let m = Lorentz::with_lines();
+        assert_eq!(m.schedule(&lms), DENSE_SIGMAS.as_slice());
+        assert_eq!(m.schedule(&sparse), SPARSE_SIGMAS.as_slice());
+        assert_eq!(m.schedule(&lonely), SPARSE_SIGMAS.as_slice());
+        // Without a dense schedule every scan takes the thesis's three passes.
+        let thesis = Lorentz::default();
+        assert_eq!(thesis.sigmas_m.len(), THESIS_SIGMAS.len());
+        assert_eq!(thesis.schedule(&lms), thesis.sigmas_m.as_slice());
+    }
+}

@@ -1,0 +1,369 @@
+//! A match's σ passes — search, pair, one NLM step, until a search no longer moves the estimate
+//! — and the point-to-line polish and the judgement that end them.
+
+use super::Lorentz;
+use super::energy::Normal;
+use crate::geometry::{Pose2, wrap_angle};
+use crate::localization::kdtree::LastNearest;
+use crate::localization::lines::Line;
+use crate::localization::matcher::{MatchResult, Reference, transform_all};
+use crate::localization::quality::{TrustRule, polish_near};
+use crate::localization::scan::ScanPoints;
+
+/// The pairs of one search by the reference point they share, for [`Lorentz::crowd_ratio`].
+struct Crowding {
+    /// The ratio of distances past which a pair is crowded out.
+    ratio: f64,
+    /// Each pair's reference point and squared distance to its target, in pair order.
+    pairs: Vec<(usize, f64)>,
+    /// For each reference point, the smallest squared distance of a pair on it (infinity for
+    /// none); reset after each search.
+    nearest: Vec<f64>,
+}
+
+impl Crowding {
+    fn new(ratio: f64, reference_points: usize) -> Self {
+        Crowding {
+            ratio,
+            pairs: Vec::new(),
+            nearest: vec![f64::INFINITY; reference_points],
+        }
+    }
+
+    /// Notes the next pair: the current point `p` (moved), paired with reference point `j`
+    /// through `target`; its squared distance to the target back.
+    fn note(&mut self, j: usize, p: [f64; 2], target: [f64; 2]) -> f64 {
+        let (dx, dy) = (target[0] - p[0], target[1] - p[1]);
+        let d2 = dx * dx + dy * dy;
+        self.pairs.push((j, d2));
+        if d2 < self.nearest[j] {
+            self.nearest[j] = d2;
+        }
+        d2
+    }
+
+    /// Leaves out of the noted pairs those more than `ratio` times farther from their targets
+    /// than the nearest pair on the same reference point and farther than it by more than
+    /// `sigma`; the rest keep their order. Ready for the next search afterwards.
+    fn drop_crowded(
+        &mut self,
+        sigma: f64,
+        (sources, targets, normals): (&mut Vec<[f64; 2]>, &mut Vec<[f64; 2]>, &mut Vec<Normal>),
+    ) {
+        let ratio2 = self.ratio * self.ratio;
+        let mut kept = 0;
+        for (k, &(j, d2)) in self.pairs.iter().enumerate() {
+            let nearest = self.nearest[j];
+            if d2 <= ratio2 * nearest || d2.sqrt() <= nearest.sqrt() + sigma {
+                sources[kept] = sources[k];
+                targets[kept] = targets[k];
+                normals[kept] = normals[k];
+                kept += 1;
+            }
+        }
+        for &(j, _) in &self.pairs {
+            self.nearest[j] = f64::INFINITY;
+        }
+        self.pairs.clear();
+        sources.truncate(kept);
+        targets.truncate(kept);
+        normals.truncate(kept);
+    }
+}
+
+/// Line-assisted association: the reference's local lines ([`lines_of`](crate::localization::lines::lines_of)), the margin past a
+/// segment's ends a projection may reach, and when the pairs projected inside a line count
+/// their distance to it alone ([`Lorentz::line_residuals_spread`], for dense scans).
+pub(super) struct Assist<'a> {
+    pub(super) lines: &'a [Option<Line>],
+    pub(super) margin: f64,
+    pub(super) spread: Option<f64>,
+}
+
+/// Whether unit normals `normals` spread enough for point-to-line residuals: the smaller
+/// eigenvalue of `Σ n nᵀ` at least `share` of the larger (none: no).
+fn normals_spread(normals: &[Normal], share: f64) -> bool {
+    let (mut xx, mut xy, mut yy) = (0.0, 0.0, 0.0);
+    for n in normals.iter().flatten() {
+        xx += n[0] * n[0];
+        xy += n[0] * n[1];
+        yy += n[1] * n[1];
+    }
+    let half_trace = 0.5 * (xx + yy);
+    let radius = (0.25 * (xx - yy) * (xx - yy) + xy * xy).sqrt();
+    let (small, large) = (half_trace - radius, half_trace + radius);
+    large > 0.0 && small >= share * large
+}
+
+impl Lorentz {
+    /// The σ passes of `sigmas`, at most `steps` NLM steps a search, leaving out crowded pairs
+    /// when `crowd` gives a ratio ([`Lorentz::crowd_ratio`]), and the polish from `guess`; the
+    /// answer judged by the trust rule. `last` keeps each current point's last nearest
+    /// reference point from one search to the next, and from one call to the next of a match
+    /// (the same answers, searched less).
+    pub(super) fn passes(
+        &self,
+        (sigmas, steps, crowd): (&[f64], u32, Option<f64>),
+        (reference, current): (&Reference, &ScanPoints),
+        lines: Option<&Assist>,
+        guess: Pose2,
+        last: &mut [Option<LastNearest>],
+    ) -> MatchResult {
+        let mut phi = [guess.theta, guess.x, guess.y];
+        let mut moved = Vec::with_capacity(current.len());
+        let mut sources = Vec::with_capacity(current.len());
+        let mut targets = Vec::with_capacity(current.len());
+        // Each pair's reference line normal, where its target is a projection inside one.
+        let mut normals = Vec::with_capacity(current.len());
+        let mut result = MatchResult::unmatched(guess);
+        // With the crowd rule: each pair's reference point and squared distance to its target.
+        let mut crowding = crowd.map(|ratio| Crowding::new(ratio, reference.points.len()));
+        // The estimate before the last σ pass (not the guess), when it is to be polished too.
+        let mut before_last = None;
+        // With `first_pass_enough` on a dense scan: the squared distance within which a pair
+        // counts as close, the share of the current points that must be, and how many of the
+        // last search's pairs were.
+        let enough = self
+            .first_pass_enough
+            .filter(|_| crowd.is_some())
+            .map(|(distance, share)| (distance * distance, share));
+        let mut close = 0;
+        // With `first_pass_surfaces` on a dense scan: the fewest points a surface that holds a
+        // pair must have been fitted to.
+        let surfaces = self.first_pass_surfaces.filter(|_| crowd.is_some());
+        // The passes of the schedule the sparse finish follows stop sooner: the finish takes
+        // the answer on.
+        let finished = self.sparse_finish.is_some() && crowd.is_none() && sigmas == self.sigmas_m;
+        for (pass, &sigma) in sigmas.iter().enumerate() {
+            if pass == 1
+                && let Some((_, share)) = enough
+                && close as f64 >= share * current.len() as f64
+            {
+                break;
+            }
+            if pass > 0 && pass + 1 == sigmas.len() && self.polish_rounds > 0 {
+                before_last = self
+                    .before_last_margin
+                    .filter(|_| crowd.is_none() && !finished)
+                    .map(|margin| (phi, margin));
+            }
+            result.settled = false;
+            // When a search of this pass has moved the estimate little enough.
+            let more_passes = pass + 1 < sigmas.len();
+            let stop = match (
+                self.first_pass_convergence,
+                self.sparse_early_convergence.filter(|_| finished),
+                self.early_convergence,
+            ) {
+                // The crowd rule marks a dense scan's schedules but the wide one.
+                (Some(first), _, _) if pass == 0 && crowd.is_some() && more_passes => first,
+                (_, Some(sparse), _) => sparse,
+                (_, _, Some(early)) if more_passes => early,
+                _ => self.convergence,
+            };
+            // The estimate before the search before the last, for `stop_on_cycles`.
+            let mut two_back: Option<[f64; 3]> = None;
+            for _ in 0..self.convergence.max_iterations {
+                result.iterations += 1;
+                let pose = Pose2::new(phi[1], phi[2], phi[0]);
+                transform_all(&pose, &current.xy, &mut moved);
+                sources.clear();
+                targets.clear();
+                normals.clear();
+                close = 0;
+                for (i, p) in moved.iter().enumerate() {
+                    let (j, d2) = reference
+                        .tree
+                        .nearest_cached(*p, &mut last[i])
+                        .expect("non-empty reference");
+                    let mut target = reference.points.xy[j];
+                    let mut normal = None;
+                    if let Some(assist) = lines
+                        && let Some(line) = &assist.lines[j]
+                    {
+                        let (on_line, inside) = line.projection(*p, assist.margin);
+                        let (dx, dy) = (on_line[0] - p[0], on_line[1] - p[1]);
+                        if dx * dx + dy * dy < d2 {
+                            target = on_line;
+                            if inside {
+                                normal = Some(line.normal());
+                            }
+                        }
+                    }
+                    if normal.is_none()
+                        && pass == 0
+                        && let Some(fewest) = surfaces
+                        && let Some(surface) = reference.surface(j)
+                        && surface.points >= fewest
+                        && let Some(on_surface) = surface.projection(*p)
+                    {
+                        target = on_surface;
+                        normal = Some(surface.normal);
+                    }
+                    let beyond = target == reference.points.xy[j] && reference.is_edge(j);
+                    if self.drop_edge_pairs && beyond {
+                        continue;
+                    }
+                    sources.push(current.xy[i]);
+                    targets.push(target);
+                    normals.push(normal);
+                    if let Some(crowding) = &mut crowding {
+                        let d2 = crowding.note(j, *p, target);
+                        // `enough` is set only with the crowd rule (dense scans).
+                        if let Some((near2, _)) = enough {
+                            close += usize::from(d2 < near2);
+                        }
+                    }
+                }
+                if let Some(crowding) = &mut crowding {
+                    crowding.drop_crowded(sigma, (&mut sources, &mut targets, &mut normals));
+                }
+                result.correspondences = targets.len();
+                if targets.is_empty() {
+                    break;
+                }
+                let before = phi;
+                let to_lines = lines
+                    .and_then(|assist| assist.spread)
+                    .is_some_and(|share| normals_spread(&normals, share));
+                let normals = to_lines.then_some(normals.as_slice());
+                phi = self.nlm((&sources, &targets), normals, phi, (sigma, steps));
+                let step = Pose2::new(
+                    phi[1] - before[1],
+                    phi[2] - before[2],
+                    wrap_angle(phi[0] - before[0]),
+                );
+                if stop.reached(&step) {
+                    result.settled = true;
+                    break;
+                }
+                let back = |o: [f64; 3]| {
+                    Pose2::new(phi[1] - o[1], phi[2] - o[2], wrap_angle(phi[0] - o[0]))
+                };
+                if self.stop_on_cycles && two_back.is_some_and(|o| stop.reached(&back(o))) {
+                    break;
+                }
+                two_back = Some(before);
+            }
+        }
+        result.pose = Pose2::new(phi[1], phi[2], wrap_angle(phi[0]));
+        // The polish and the judgement search near where the passes did: `last` goes on.
+        let mut after_rounds = None;
+        if self.polish_rounds > 0 {
+            // The crowd rule marks a dense scan's schedules but the wide one, as above.
+            let more = self.polish_more.filter(|_| crowd.is_some());
+            (result.pose, after_rounds) = self.polish(reference, current, result.pose, more, last);
+        }
+        let rule = TrustRule::default();
+        result.quality = rule.assess_near(reference, &current.xy, &result.pose, Some(&mut *last));
+        // The polish went on past its rounds: kept unless the pose it had reached then fits
+        // more of the current points.
+        if let Some(earlier) = after_rounds {
+            let quality = rule.assess_near(reference, &current.xy, &earlier, Some(&mut *last));
+            if quality.inlier_share > result.quality.inlier_share {
+                (result.pose, result.quality) = (earlier, quality);
+            }
+        }
+        // Set only with the polish.
+        if let Some((phi, margin)) = before_last {
+            let earlier = Pose2::new(phi[1], phi[2], phi[0]);
+            let (earlier, _) = self.polish(reference, current, earlier, None, last);
+            let quality = rule.assess_near(reference, &current.xy, &earlier, Some(&mut *last));
+            if quality.inlier_share > result.quality.inlier_share + margin {
+                (result.pose, result.quality) = (earlier, quality);
+            }
+        }
+        result
+    }
+
+    /// The point-to-line polish of `pose`, `polish_rounds` rounds and, with `more`, those
+    /// [`polish_near`] adds: the polished pose, and the pose after `polish_rounds` where more
+    /// rounds moved it.
+    fn polish(
+        &self,
+        reference: &Reference,
+        current: &ScanPoints,
+        pose: Pose2,
+        more: Option<(f64, usize)>,
+        last: &mut [Option<LastNearest>],
+    ) -> (Pose2, Option<Pose2>) {
+        let rounds = (self.polish_rounds, 0.01, 0.05);
+        let (polished, after_rounds) =
+            polish_near(reference, &current.xy, pose, rounds, more, last);
+        let wrapped = |p: Pose2| Pose2::new(p.x, p.y, wrap_angle(p.theta));
+        (wrapped(polished), after_rounds.map(wrapped))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::localization::CROWD_RATIO;
+
+    /// Of the pairs on one reference point, those more than three times farther than the
+    /// nearest and farther than it by more than σ are left out; the others, and every pair on
+    /// a point of its own, stay in their order, and the next search starts afresh.
+    #[test]
+    fn crowded_pairs_are_left_out() {
+        let mut crowding = Crowding::new(CROWD_RATIO, 4);
+        // (reference point, distance to the target along x).
+        let pairs = [
+            (2, 0.010),
+            (2, 0.025),
+            (1, 0.9),
+            (2, 0.5),
+            (2, 0.05),
+            (3, 0.2),
+        ];
+        let (mut sources, mut targets, mut normals) = (Vec::new(), Vec::new(), Vec::new());
+        for (k, &(j, d)) in pairs.iter().enumerate() {
+            let p = [k as f64, 0.0];
+            let target = [k as f64 + d, 0.0];
+            sources.push(p);
+            targets.push(target);
+            normals.push(None);
+            crowding.note(j, p, target);
+        }
+        crowding.drop_crowded(0.02, (&mut sources, &mut targets, &mut normals));
+        // On point 2 the nearest is 0.010 away: 0.025 is within three times that and stays;
+        // 0.05 and 0.5 are beyond both that and the nearest plus σ (0.03), and go. The pairs
+        // on points 1 and 3 are alone there.
+        let kept: Vec<usize> = sources.iter().map(|p| p[0] as usize).collect();
+        assert_eq!(kept, vec![0, 1, 2, 5]);
+        assert_eq!(targets.len(), 4);
+        assert_eq!(normals.len(), 4);
+        // With σ 5 cm, 0.05 lies within σ of the nearest (0.06) and stays; 0.5 still goes.
+        for (k, &(j, d)) in pairs.iter().enumerate() {
+            crowding.note(j, [k as f64, 0.0], [k as f64 + d, 0.0]);
+        }
+        let (mut s, mut t, mut n) = (
+            (0..6).map(|k| [k as f64, 0.0]).collect::<Vec<_>>(),
+            vec![[0.0; 2]; 6],
+            vec![None; 6],
+        );
+        crowding.drop_crowded(0.05, (&mut s, &mut t, &mut n));
+        let kept: Vec<usize> = s.iter().map(|p| p[0] as usize).collect();
+        assert_eq!(kept, vec![0, 1, 2, 4, 5]);
+        assert!(crowding.pairs.is_empty());
+        assert!(crowding.nearest.iter().all(|d| d.is_infinite()));
+    }
+
+    /// Normals all one way (a corridor) or none do not spread; a corner's do, as far as the
+    /// share of its walls' points allows.
+    #[test]
+    fn line_normals_spread_like_the_walls_they_come_from() {
+        let wall = |n: usize, angle: f64| vec![Some([angle.cos(), angle.sin()]); n];
+        let corridor = [wall(100, 0.3), wall(80, 0.3 + std::f64::consts::PI)].concat();
+        assert!(!normals_spread(&corridor, 0.01));
+        assert!(!normals_spread(&[None, None], 0.01));
+        assert!(!normals_spread(&[], 0.01));
+        let corner = [
+            wall(100, 0.3),
+            wall(60, 0.3 + std::f64::consts::FRAC_PI_2),
+            vec![None; 50],
+        ]
+        .concat();
+        assert!(normals_spread(&corner, 0.5));
+        assert!(!normals_spread(&corner, 0.7));
+    }
+}

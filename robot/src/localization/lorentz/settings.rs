@@ -1,0 +1,502 @@
+//! The constants [`Lorentz::with_lines`] is tuned with, each doc giving what it measured when
+//! it was chosen, and the two small settings types they fill.
+
+#[cfg(doc)]
+use super::Lorentz;
+use crate::geometry::Pose2;
+use crate::localization::correlative;
+use crate::localization::matcher::Convergence;
+use crate::localization::plicp::PointToLine;
+
+/// The thesis's σ schedule, in the unit [`Lorentz::SIGMA_UNIT_M`].
+pub const THESIS_SIGMAS: [f64; 3] = [2.0, 5.0, 0.5];
+
+/// How a sparse match starts ([`Lorentz::sparse_start`]): `icp`'s rounds from the guess, and
+/// the σ passes from their answer when it moved no farther than `reach_m` and `reach_rad` from
+/// the guess, else from the guess (a round that carries the estimate farther paired most
+/// points with the wrong reference points).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct StartRounds {
+    /// The point-to-line ICP that runs, its `convergence.max_iterations` the rounds.
+    pub icp: PointToLine,
+    /// The farthest its answer may lie from the guess, metres …
+    pub reach_m: f64,
+    /// … and radians.
+    pub reach_rad: f64,
+}
+
+/// The start of a sparse match in [`Lorentz::with_lines`] ([`Lorentz::sparse_start`]): one
+/// round of point-to-line ICP (the finish's settings, [`SPARSE_FINISH`]) from the guess, kept
+/// within 30 cm and 0.1 rad (5.7°) of it; the σ passes then start at 5 cm
+/// ([`SPARSE_SIGMAS`]). The thesis's first pass, at σ 2 cm, had made most of a 1° match's
+/// correspondence searches: from a guess centimetres off, most residuals lie where the
+/// Lorentzian's slope is small, and its estimate crept towards the answer a little each search
+/// (the nearest-point searches of those first steps, which the last answer's cache cannot
+/// answer, were a third of a match's time). One point-to-line round jumps most of the way for
+/// one search, trimmed as point-to-line ICP trims (outliers stay out of it). Measured
+/// (`twin matchers --matchers lorentz-lines --seeds 10`, right answers of 3,000 a row, against
+/// the build before on the same seeds; 2026-11-30): on the tuning seeds 1–10 and 51–60 the 1°
+/// rows +3 −2, Edmonton +12 −11, the large guesses +2 −2; held out, 21–30 and 41–50, the 1°
+/// rows +4 −1, Edmonton +4 −5, the large guesses +5 −2; every dense row the same answers to
+/// the bit. Searches a pair (seeds 1–10) 16.6 → 11.8 on the 1° pairs without outliers, 21.5 →
+/// 14.1 with 20 %, 51.6 → 32.2 on Edmonton. Raced against `pl-icp` (`cargo bench --bench
+/// matcher_race`, in turn with the build before): the 1° pairs without outliers 1.72 → 1.43
+/// of its time, with 20 % 0.57 → 0.47, Edmonton 0.60 → 0.41, the large guesses 1.00 → 0.93.
+/// Tried in a first form (the 5 cm pass then stopped at the last pass's tight test, 1.46):
+/// two rounds were no faster (1.46–1.48) and the 2 cm pass kept after the round slower
+/// (1.51–1.54), both about as right; without the reach, 7 of the large guesses' answers of
+/// 6,000 were lost (the notebook, *2026-11-30*).
+pub const SPARSE_START: StartRounds = StartRounds {
+    icp: PointToLine {
+        convergence: Convergence {
+            max_iterations: 1,
+            ..SPARSE_FINISH.convergence
+        },
+        ..SPARSE_FINISH
+    },
+    reach_m: 0.3,
+    reach_rad: 0.1,
+};
+
+/// When [`Lorentz::slide_check`] matches again, and what it keeps: where the points that lie
+/// off their surfaces but across the direction a trusted answer's inliers hold it least (along
+/// a wall) say that a shift of `min_shift_m` to `reach_m` along it would bring at least
+/// `min_gain` of them within the trust rule's distance of their surfaces, and the trust rule
+/// finds more of the current points inliers there than at the answer, the σ passes run again
+/// from the answer so shifted; their answer replaces the first when trusted, fitting more than
+/// `margin` more of the current points and lying at least `min_shift_m` from it (nearer, it is
+/// the same answer settled a few millimetres aside, not a slide undone).
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct SlideCheck {
+    /// The fewest points the shift must bring in.
+    pub min_gain: usize,
+    /// The shortest shift worth a match, and the least the second answer must lie from the
+    /// first, metres.
+    pub min_shift_m: f64,
+    /// The farthest shift looked at, metres.
+    pub reach_m: f64,
+    /// How much larger a share of the current points the second answer must fit.
+    pub margin: f64,
+}
+
+/// The slide check of [`Lorentz::with_lines`]: two points, 2.5 cm to 20 cm, a margin of one
+/// percent of the current points. The twin's pairs with 20 % outliers that `lorentz-lines`
+/// got wrong were mostly answers 5–15 cm along a wall from the truth, trusted, where the few
+/// points on the surfaces across it (a doorway's side, a box's end) lay centimetres off theirs
+/// and the truth fitted up to 5 % more of the current points; each of those points says, by
+/// how far it lies off its surface, how far the answer should move (`slide_vote`). First
+/// chosen (seeds 1–10 and 51–60 of `twin matchers --matchers lorentz-lines`, held out on 21–30
+/// and 41–50) with every point near its surface voting, the inliers' votes to stay counted
+/// against the others': a point on a pillar or a box, carried by the shift onto another of the
+/// reference's points, then voted against a slide the truth undid (pair 280 of seed 52). Now
+/// only the points off their surfaces vote, those beyond their surface's end not at all (a
+/// line extrapolated from the reference's last beam drew slides 6 cm off the truth that fitted
+/// more there: pair 10 of seed 57 without outliers), the judgement at the voted shift decides
+/// whether to match again, and the margin is one percent (half of one kept a slide 10 cm off
+/// the truth fitting 0.57 % more than the truth did: pair 187 of seed 56). Against the first
+/// form on the same seeds: right answers +1 on the 20 % row of 51–60 and of held-out 21–30, +1
+/// on the large guesses of 51–60, none lost, 5 % fewer searches on the dense pairs. A
+/// second answer that fitted more but lay millimetres from the first moved two Table 5.1
+/// trials from 1.0 and 4.2 mm to 7.4 and 8.8 mm off: it must lie `min_shift_m` away. Five
+/// points had been asked while the vote counted the inliers against the shift; now that the
+/// judgement there and the margin weigh the shift, two are enough (one gave the same answers
+/// on the tuning seeds): Belgioioso's pair 125, 14 cm along its corridor from every guess that
+/// left it there, comes back to 3 cm (+7 and +3 right answers on seeds 1–10 and 51–60, +5 and
+/// +4 held out on 21–30 and 41–50), and one synthetic pair each without and with outliers held
+/// out (13 cm and 7 cm off before); none lost. On seeds 61–80, first run after the choice:
+/// Belgioioso +9, two more synthetic pairs with 20 % outliers, none lost.
+///
+/// Sparse scans (the twin's 1° scans, Edmonton's) run the same check
+/// ([`Lorentz::sparse_slide_check`]) on their finished answer, the second match finished too:
+/// over seeds 1–10 and 51–60 +15 right answers on the 1° rows, two lost (pair 132 of seed 9
+/// and pair 137 of seed 57, 13–15 mm off before, now 6–18 cm along a wall where the answer
+/// fits 0.5–5 % more of the current points than the truth does); Edmonton's the same. A
+/// margin of two percent kept 10 of the gains and lost one; checking the answer before the
+/// finish lost a third (the finish would have brought the first answer level). Held out,
+/// seeds 21–30 and 41–50: +8, none lost; seeds 61–80, run after the choice: +22 on the 1°
+/// rows, +1 on the large guesses (a third of their pairs are Edmonton's), none lost.
+pub const SLIDE_CHECK: SlideCheck = SlideCheck {
+    min_gain: 2,
+    min_shift_m: 0.025,
+    reach_m: 0.2,
+    margin: 0.01,
+};
+
+/// The schedule of [`Lorentz::with_lines`] for dense scans (beams under 0.75° apart): σ 5 cm,
+/// then 2 and 0.5 cm, narrowing throughout. The thesis's 2 → 5 → 0.5 cm widens in its middle
+/// pass, and at 5 cm the points of a dense scan that see what the reference did not (new
+/// ground, the far side of a pillar) pull the estimate aside: started at the truth,
+/// `lorentz-lines` left it for a place 57–95 mm away on pairs where point-to-line ICP stayed
+/// within 2 mm. Over 3,600 pairs a row (`twin matchers`, seeds 1–12) it raised the right
+/// answers from 0.9983 to 0.9989 (synthetic, 0 %), 0.9961 to 0.9972 (20 %) and 0.9969 to
+/// 0.9992 (Belgioioso), and lost one pair each on Freiburg 101 and the large guesses, with 6 %
+/// fewer correspondence searches. On sparse scans (Edmonton's 1° beams) the widening middle
+/// pass pulls in guesses the narrowing schedule leaves out: every narrowing schedule tried lost
+/// 15–40 of Edmonton's 2,400 pairs, so those keep the thesis's.
+pub const DENSE_SIGMAS: [f64; 3] = [0.05, 0.02, 0.005];
+
+/// How spread the line normals of a search must be for [`Lorentz::with_lines`] to count its
+/// line pairs' distance to their lines alone ([`Lorentz::line_residuals_spread`]): the smaller
+/// eigenvalue of `Σ n nᵀ` at least half the larger. The product form holds a point to its
+/// projection, so the estimate crawls along walls by what the projections move in one search;
+/// measured over seeds 1–12 of `twin matchers` (3,600 pairs a row), the median correspondence
+/// searches a pair fell from 57 to 35 (synthetic, 0 %), 54 to 40 (20 %), 63 to 30
+/// (Belgioioso), 66 to 60 (Freiburg 101) and 87 to 73 (large guesses), with the same right
+/// answers on every row. At a quarter the searches fell further (to 25, 32, 24, 44 and 60)
+/// but Belgioioso lost a pair. Since [`FIRST_SPREAD`], the first match from the guess asks a
+/// tenth; sparse scans ask [`SPARSE_LINE_RESIDUALS_SPREAD`].
+pub const LINE_RESIDUALS_SPREAD: f64 = 0.5;
+
+/// How spread the line normals of a search of a sparse scan (Edmonton's 1° beams, the twin's
+/// SICK in its 1° mode) must be for [`Lorentz::with_lines`] to count its line pairs' distance
+/// to their lines alone ([`Lorentz::sparse_line_residuals_spread`]): a tenth. In the product
+/// form the first σ pass (2 cm) of a 1° scan crawled along the walls, a search at a time, each
+/// moving the estimate a little over half as far as the one before, and took half of a match's
+/// searches. Over seeds 1–20 of `twin matchers` (`lorentz-lines` alone, 6,000 pairs a row),
+/// against the product form: right answers 5,995 → 5,995 (synthetic 1°, 0 %), 5,970 → 5,968
+/// (1°, 20 %; +2 −4, the lost answers 1.0–3.7° off, fitting as many of the current points as
+/// the answers before or more), Edmonton 5,801 → 5,816 (+22 −7), the large guesses 5,909 →
+/// 5,909 (+2 −2); the dense rows the same answers to the bit. Correspondence searches a pair,
+/// mean: 40.0 → 22.4 (1°, 0 %), 36.7 → 26.5 (1°, 20 %), 66.2 → 61.3 (Edmonton). A tenth took
+/// fewer searches still (20.4 without outliers) but was right less often (Edmonton 5,807, 1°
+/// with outliers 5,967); 0.3 (seeds 1–10) as often as a fifth, for 24.5 searches against 22.4;
+/// a half, the dense scans' share, took more time than a tenth (`cargo bench --bench
+/// matcher_race`). Held out, seeds 21–30: the same right answers on every row (Edmonton 2,898,
+/// +8 −8; the 1° rows 2,993 and 2,990), searches 39.4 → 22.1 (1°, 0 %) and 65.7 → 60.9
+/// (Edmonton). So a fifth was chosen then; since the finish took the place of the 5 mm pass
+/// ([`SPARSE_SIGMAS`]), a tenth is right as often: over seeds 1–10 and held-out 21–30, against
+/// a fifth, Edmonton 2,911 → 2,911 and 2,910 → 2,911, the 1° pairs with outliers 2,981 →
+/// 2,981 and 2,991 → 2,990, the 1° pairs without and the large guesses the same, for 8 % fewer
+/// searches (18.2 → 16.6 and 18.5 → 17.0 a pair on the 1° pairs without outliers, 54.0 → 51.1
+/// and 53.3 → 50.7 on Edmonton); a twentieth lost a pair on Edmonton and one with outliers
+/// over seeds 1–10 for 16.0 searches.
+pub const SPARSE_LINE_RESIDUALS_SPREAD: f64 = 0.1;
+
+/// How spread the line normals of a search of the first match from the guess must be for
+/// [`Lorentz::with_lines`] to count its line pairs' distance to their lines alone
+/// ([`Lorentz::first_spread`]): a tenth, not [`LINE_RESIDUALS_SPREAD`]'s half. Under the half,
+/// the product form holds each point to its projection, and the estimate crawls along the walls
+/// by what the projections move in one search, up to the cap of searches; a room seen with
+/// most of its walls one way (down a long room, along one side) is not a corridor, and there
+/// point-to-line residuals bring the scans together in fewer searches. Under a tenth the lines
+/// all run one way, and the product form still holds.
+///
+/// Where the scans share little more than one wall, the line pairs can slide along it to
+/// where a few other points put them: Belgioioso's pair 125 slid 14 cm on 8 seeds of 12 with
+/// this share and no second match. So a loose answer is matched again with the half, whose
+/// product form along such a wall stays nearer the guess, and that answer wins unless the first
+/// fits clearly more points ([`FIRST_SPREAD_MARGIN`]). Over seeds 1–20 of `twin matchers`
+/// (6,000 pairs a row, Freiburg 101 5,820), against the half throughout: right answers
+/// 5996 → 5996 (synthetic, 0 %), 5981 → 5985 (20 %), 5996 → 5998 (Belgioioso), 5714 → 5714
+/// (Freiburg 101) and 5572 → 5577 (large guesses), Edmonton's sparse scans unchanged;
+/// correspondence searches a pair, mean over seeds 1–12, 40 → 27 (synthetic, 0 %), 54 → 46
+/// (Belgioioso), 63 → 48 (Freiburg 101), about the same on the other rows. Asking nothing of
+/// the spread (a share of 0) took fewer searches still on Freiburg 101 (27), but let pure
+/// corridors slide: 002's L-corridor 7 cm, a synthetic pair started at the truth 13 cm.
+pub const FIRST_SPREAD: f64 = 0.1;
+
+/// The NLM steps [`Lorentz::with_lines`] takes on each search's pairs in its first match from
+/// the guess ([`Lorentz::first_max_steps`]): one. The thesis minimises each search's pairs to
+/// the end (up to 30 accepted steps) before it searches again; but the pairs change at the next
+/// search, and a full minimisation on pairs found from a pose some centimetres off carries the
+/// estimate as far as they lead, wrong ones included. One damped Newton step a search (λ from
+/// 0.001, raised tenfold until the error falls) ends where a search no longer moves the
+/// estimate in about as many searches, each a fraction of the cost. Over seeds 1–20 of `twin
+/// matchers` (6,000 pairs a row, Freiburg 101 5,820), against 30: right answers 5996 → 5995
+/// (synthetic, 0 %), 5985 → 5982 (20 %), 5998 → 5999 (Belgioioso), 5714 → 5717 (Freiburg 101),
+/// 5645 → 5677 (Edmonton) and 5577 → 5595 (large guesses). The fallbacks keep 30: with one
+/// step there too, a restart 15 cm from the guess slid 55 cm down the lab in a closed-loop
+/// `goto-lab` run (seed 2027, trial 73) and the map builder trusted it. With the steps in every
+/// match, two a search did no better than 30 on Edmonton, four little better.
+pub const FIRST_STEPS: u32 = 1;
+
+/// When [`Lorentz::with_lines`] leaves out the narrower σ passes of a dense scan
+/// ([`Lorentz::first_pass_enough`]): 65 % of the current points paired within 2 cm of their
+/// targets in the last search of the first pass (σ 5 cm); 70 % until 2026-11-30 (below). The
+/// narrowing passes are there to take the pull of the points that do not belong (outliers,
+/// what only one scan saw) off the estimate; where most points already lie within 2 cm, few
+/// are left to pull, and the point-to-line polish that follows places the answer as precisely.
+/// At 70 % (the figures that follow, until the last paragraph's), measured after the first
+/// pass of seed 1's first matches: a median of 88 % within 2 cm without outliers (5 % of pairs
+/// under 74 %), 55 % with 20 % outliers (10 % over 67 %). Over seeds 1–20 of `twin matchers`
+/// (6,000 pairs a row, Freiburg 101 5,820), with [`Lorentz::stop_on_cycles`]: right answers
+/// 5999 → 5998 (synthetic, 0 %; a pair sliding along a wall, 39 → 56 mm off, where the truth
+/// fits barely more points), 5983 → 5983 (20 %), 5989 → 5989 (Belgioioso), 5716 → 5716
+/// (Freiburg 101), 5817 → 5817 (Edmonton) and 5891 → 5890 (large guesses); median
+/// correspondence searches a pair 22 → 12, 35 → 31, 26 → 18, 25 → 20, 56 → 55 and 61 → 55.
+/// Leaving the narrower passes out everywhere took as few searches but, with 20 % outliers,
+/// turned the Table 5.1 study's mean heading error up by a fortieth (0.0297 → 0.0305°) and its
+/// largest from 0.42 to 0.55°; leaving out only the middle pass (5 → 0.5 cm) lost 5 pairs of
+/// 6,000 with 20 % outliers and 5 of the large guesses.
+///
+/// 65 % since 2026-11-30: Belgioioso's real scans, where a median pair fits 81 % of its
+/// points, seldom reached 70 % and ran all three passes (a median of 15 searches a pair,
+/// 1.02–1.08 of `pl-icp`'s time). At 65 %, over `twin matchers --matchers lorentz-lines` on
+/// seeds 1–10 and 51–60 (chosen there, from 60 and 65 %) and held out on 21–30, 41–50 and
+/// 61–80, every row is right on the same pairs but one more with 20 % outliers (seeds 61–70);
+/// Belgioioso's median searches 15 → 10, its time 1.03–1.05 of `pl-icp`'s (`cargo bench
+/// --bench matcher_race`, three races in turn with 70 %); the twin's median errors within
+/// 0.01 mm, the real logs' the same or lower. Table 5.1: the 20 % row's worst e_t 13.03 →
+/// 12.58 mm, every other printed figure the same. At 60 % Belgioioso came level (0.998) but
+/// the 20 % row's sd of e_θ rose from 0.02946 to 0.02962°, printed 0.029 → 0.030.
+pub const FIRST_PASS_ENOUGH: (f64, f64) = (0.02, 0.65);
+
+/// The fewest points a reference surface must have been fitted to for [`Lorentz::with_lines`]
+/// to hold a pair no line holds to it in the first σ pass of a dense scan
+/// ([`Lorentz::first_pass_surfaces`]): seven, three either side of the point and the point
+/// itself, all on the chord, so a straight piece of surface. Counted in that pass (seed 1,
+/// the synthetic pairs without outliers), 37 % of the pairs had no line to be held to: grown
+/// lines need five points within 2 cm RMS and end where the points do, so a corner, a short
+/// face or a point past a line's end paired with the nearest point alone and pulled the
+/// estimate toward it, point to point, search after search. Over seeds 1–20 of `twin matchers`
+/// (6,000 pairs a row, Freiburg 101 5,820), with [`FIRST_PASS_ENOUGH`] and
+/// [`Lorentz::stop_on_cycles`] before and after: right answers 5998 → 5998 (synthetic, 0 %),
+/// 5983 → 5982 (20 %), 5989 → 5990 (Belgioioso), 5716 → 5716 (Freiburg 101), 5817 → 5817
+/// (Edmonton, not dense: the same answers) and 5890 → 5892 (large guesses); median
+/// correspondence searches a pair 12 → 7, 31 → 30, 18 → 16, 20 → 19, 55 → 55 and 55 → 48; the
+/// synthetic median error 1.63 → 1.62 mm. Five points (any straight piece of the chord) took
+/// fewer searches still with 20 % outliers (31 → 24), but turned the Table 5.1 study's worst
+/// heading error at 20 % from 0.42 to 0.52° (trial 14132, the far outliers' torque); in every
+/// pass, not only the first, the study's mean e_t at 20 % rose by 0.009 mm and that worst
+/// heading error to 0.63°; every surface, however short, in every pass, lost 3 of
+/// Belgioioso's pairs in 1,200 and raised that worst heading error to 0.56°.
+pub const FIRST_PASS_SURFACE_POINTS: usize = crate::localization::quality::SURFACE_POINTS;
+
+/// How long [`Lorentz::with_lines`]' polish goes on past its five rounds on a dense scan
+/// ([`Lorentz::polish_more`]): while its last round still turned the estimate by more than
+/// 0.02°, at most 25 rounds more. Each round weighs a point by `1 / (1 + (e / 1 cm)²)` and
+/// leaves out those more than 5 cm from a surface, so where the σ passes end a degree or two
+/// off in heading, the farther points, which would say so, count for little, and the answer
+/// creeps toward the minimum a tenth of a degree a round: printed round by round on six
+/// failing synthetic pairs with 20 % outliers, 30 rounds brought five of them within 0.4°
+/// (from 1.05–1.83° after five). The longer answer is kept unless the one after five rounds
+/// fits more of the current points (the trust rule's share): on Belgioioso one scan pair went
+/// on to a place 0.4° farther from the log's pose fitting 2 % fewer points. Over seeds 1–20
+/// of `twin matchers` (6,000 pairs a row): right answers with 20 % outliers 5982 → 5988 (7
+/// gained; 1 lost, whose polish minimum lies 1.1° off where five rounds had stopped short of
+/// it), every other row the same pairs; Edmonton's 1° scans are not dense (the same answers
+/// to the bit). The heading errors summed over the 20 % row fell by 8 %; on Belgioioso 456
+/// answers moved, most by hundredths of a degree, the larger moves away from the log's
+/// heading to places that fit more points than the log's pose. The Table 5.1 study: with
+/// 20 % outliers the worst heading error 0.416 → 0.315° (trial 14132, the far outliers'
+/// torque), the mean 0.0297 → 0.0296° and the sd of e_t 1.1857 → 1.1853 mm; at 2 % 23 trials
+/// of 10,000 moved, the mean e_t by 0.0001 mm. Without the guard: 5987 right (0.01° the same,
+/// 0.05° 5986, 0.08° 5986) and Belgioioso's summed heading error up 3 %.
+pub const POLISH_MORE: (f64, usize) = (0.02_f64.to_radians(), 25);
+
+/// How many fewer of the current points (as a share) the answer matched again with
+/// [`LINE_RESIDUALS_SPREAD`] may fit than a loose first answer and still be kept
+/// ([`Lorentz::first_spread`]): when the scans cannot tell the two apart, the product form's,
+/// which stays nearer the guess along what the scans leave free. 0 and 0.02 gave the same
+/// answers over seeds 1–12 but for one pair.
+pub const FIRST_SPREAD_MARGIN: f64 = 0.01;
+
+/// How many times farther from its target than the nearest pair on the same reference point
+/// a pair of a dense scan may lie and still count ([`Lorentz::crowd_ratio`]): three, as the
+/// reference matcher's rule for doubles ([`PointToLine`]), here with the
+/// pass's σ as a floor so that neighbouring points of one wall a few millimetres apart all
+/// stay.
+///
+/// Current points that see what the reference did not — past the end of the reference's
+/// view, round a corner it hid — have their nearest reference points at the edge of what it
+/// saw, tens of them on one point, 0.2–1.3 m away. Each pulls little at σ 5 cm, but together
+/// they pull like as many inliers a centimetre off: in the Table 5.1 study's trial 13357 (20 %
+/// outliers, a 25° turn left, the guess 1.2 mm from the truth) 45 current points of a wall the
+/// reference never saw lay on its last point of that wall, and the first pass walked 6 cm
+/// from the truth; the answer, 27.6 mm off, was trusted. Left out, the study's worst
+/// translation errors of `lorentz-lines` fell from 33.8 to 16.0 mm at 2 % outliers and from
+/// 27.6 to 13.0 mm at 20 % (`pl-icp`: 16.8 mm), every other figure of its rows the same or
+/// better. Over seeds 1–20 of `twin matchers` (6,000 pairs a row, Freiburg 101 5,820), with
+/// [`EARLY_CONVERGENCE`]: right answers 5995 → 5999 (synthetic, 0 %), 5982 → 5983 (20 %),
+/// 5717 → 5716 (Freiburg 101), 5677 → 5681 (Edmonton), 5595 → 5597 (large guesses), and
+/// Belgioioso 5999 → 5989: there the scans of pair 125 share one corner's walls, and the
+/// log's pose fits fewer of the current points (39 % within 5 cm) than either answer (53 %);
+/// the two stay equally good to the scans, and the one kept is now 14 cm from the log's pose,
+/// not 4 cm (the same pair on 9 seeds; pair 115 on 2 more, now 2.7° off, fitting 75 % of the
+/// points where the log's pose fits 68 %). Since [`SLIDE_CHECK`] asks two points across the
+/// wall, not five, pair 125 comes back to 3 cm from the log's pose, fitting 55 %.
+///
+/// Sparse scans (the thesis's schedule) keep every pair: on Edmonton's 1° beams several
+/// current points share a reference point at long range, and the rule lost 63 of its 6,000
+/// pairs. Nor does the wide schedule ([`WIDE_SIGMAS`]) use it, which starts where the scans
+/// may still be decimetres apart and the nearest pair on a reference point is no better a
+/// guide than the others: with the rule there too the large guesses lost 7 pairs of 6,000.
+pub const CROWD_RATIO: f64 = 3.0;
+
+/// The finish of [`Lorentz::with_lines`] on sparse scans ([`Lorentz::sparse_finish`]):
+/// point-to-line ICP with CSM's defaults ([`PointToLine::default`]) but no restarts, one
+/// Gauss–Newton step a round, and a stop when the pairings come round in a cycle of up to seven
+/// iterations. On 1° beams the Lorentzian's pairs are a point and its nearest
+/// reference point or a line fitted to a few far-apart points, and its answers depend on the
+/// guess: on Edmonton's pairs (`twin matchers`, seeds 1–20, each from its own guess) they lay
+/// more than 1 cm from the median of the 20 answers on 105 of 300 pairs and more than 3 cm on
+/// 44, where point-to-line ICP's, paired with the segment between two neighbouring reference
+/// points, did so on 40 and 11. Finished so, 66 and 20, and the right answers rose from 5,817
+/// to 5,872 of 6,000 (pl-icp: 5,833), none lost; from large guesses 5,892 to 5,901. With CSM's
+/// restarts too: 5,844 and 5,906, at 2.2 times `pl-icp`'s time. Without the cycle stop a
+/// quarter of Edmonton's finishes ran to the cap of 100 iterations, coming back again and
+/// again to where they had been. Stopped there, the same pairs are right on every row (over
+/// seeds 1–20 the answers moved on 872 of the 12,000 pairs of Edmonton and the large guesses,
+/// by more than 5 mm on 91, none across the line of success) for a fifth of the finish's
+/// iterations, and `lorentz-lines` went from 0.95 to 0.71 of `pl-icp`'s time on Edmonton
+/// (`cargo bench --bench matcher_race`; 0.62 without the finish); with a cycle of two only,
+/// as [`Lorentz::stop_on_cycles`], 448 of 6,000 still ran to the cap. The dense scans' rows do
+/// not run it. Measured again with Edmonton's readings 1° apart, as CARMEN reads them: over
+/// seeds 1–20 Edmonton's right answers 5,736 without the finish, 5,753 with it; the large
+/// guesses 5,867 and 5,882; answers more than 1 / 3 cm from their median 97 / 37 and 80 / 18
+/// (`pl-icp` 33 / 10). Kept then only when it fits no fewer of the current points: kept when it
+/// fitted up to 2 in 100 fewer (as on the stretched scans), 5,734 and 5,883.
+pub const SPARSE_FINISH: PointToLine = PointToLine {
+    restart_above_m: None,
+    gauss_newton_steps: 1,
+    stop_on_cycles: Some(7),
+    ..PointToLine::CSM
+};
+
+/// When the σ passes before the last stop in [`Lorentz::with_lines`]
+/// ([`Lorentz::early_convergence`]): a search that moves the estimate by under 0.1 mm and
+/// 0.001°, ten times the last pass's test; the next pass moves the estimate on anyway. Alone,
+/// over seeds 1–20 of `twin matchers`: Edmonton's right answers 5677 → 5681 and the large
+/// guesses' 5595 → 5598, the other rows within a pair; the median correspondence searches a
+/// pair on Edmonton 71 → 64. Alone it also moved one Table 5.1 trial's heading error up
+/// (14132, 20 % outliers: 0.505 → 0.518°); with [`CROWD_RATIO`] every figure of the study is
+/// the same or better.
+pub const EARLY_CONVERGENCE: Convergence = Convergence {
+    translation_m: 1e-4,
+    rotation_rad: 1e-3 * std::f64::consts::PI / 180.0,
+    max_iterations: 30,
+};
+
+/// When the first σ pass of a dense scan stops in [`Lorentz::with_lines`]
+/// ([`Lorentz::first_pass_convergence`]): a search that moves the estimate by under 0.3 mm and
+/// 0.003°, three times [`EARLY_CONVERGENCE`]. The polish, or the narrower passes, take the
+/// answer on from there; a third of a millimetre is under a hundredth of the pass's σ (5 cm).
+/// Over seeds 1–20 of `twin matchers` every row was right on as many pairs, and a pair's
+/// searches fell by 1–10 % on average on the dense rows (8.9 → 8.0 on the synthetic pairs
+/// without outliers). Five times lost a pair with 20 % outliers, ten times seven pairs without
+/// and with outliers.
+pub const FIRST_PASS_CONVERGENCE: Convergence = Convergence {
+    translation_m: 3e-4,
+    rotation_rad: 3e-3 * std::f64::consts::PI / 180.0,
+    max_iterations: 30,
+};
+
+/// When the σ passes of a sparse scan's schedule ([`SPARSE_SIGMAS`]) stop in
+/// [`Lorentz::with_lines`] ([`Lorentz::sparse_early_convergence`]), the sparse finish
+/// following the last: a search that moves the estimate by under 0.3 mm and 0.003°, as a
+/// dense scan's first pass ([`FIRST_PASS_CONVERGENCE`]), three times [`EARLY_CONVERGENCE`]; the
+/// finish places the answer, so no pass need crawl to a tenth of a millimetre. For the passes
+/// before the last, over seeds 1–10 and held-out 21–30 of `twin matchers` (`lorentz-lines`
+/// alone, with the second polish already left out of sparse scans,
+/// [`Lorentz::before_last_margin`], and the thesis's σ 5 mm pass still last): no right answer
+/// lost on any row and seven gained (the large guesses +5, the twin's 1° pairs with outliers
+/// +2), searches a pair 22.4 → 20.0 on the 1° pairs without outliers and 61.3 → 58.2 on
+/// Edmonton; the first pass alone so: nothing gained or lost, 22.4 → 21.3 searches; the first
+/// at 1 mm and 0.01°: 19.9 searches, but Edmonton and the 1° pairs with outliers each one pair
+/// fewer. The σ 5 mm pass stopped at 3 mm and 0.03° then (it had crawled along Edmonton's
+/// walls); the last pass is now the 5 cm one, and stopped there it left nine answers of
+/// 6,000 on the 1° rows 6–13 cm along their walls, trusted (seeds 1–10): it stops as the
+/// others.
+pub const SPARSE_EARLY_CONVERGENCE: Convergence = FIRST_PASS_CONVERGENCE;
+
+/// The σ schedule of [`Lorentz::with_lines`] for sparse scans (beams 0.75° apart or more, a
+/// SICK's 1° mode; [`Lorentz::sigmas_m`]): the thesis's 2 → 5 cm without its last pass at
+/// 5 mm ([`THESIS_SIGMAS`]), metres. The point-to-line finish that follows ([`SPARSE_FINISH`])
+/// places the answer where the narrow pass did: stopped at 3 mm, that pass had come to a
+/// sixth of a 1° match's correspondence searches. Over seeds 1–10 and held-out 21–30 of
+/// `twin matchers` (`lorentz-lines` alone, every pass stopped at
+/// [`SPARSE_EARLY_CONVERGENCE`]): Edmonton's right answers 2,906 → 2,911 and 2,898 → 2,910
+/// (+28 −11 over both), the large guesses 2,961 → 2,967 and 2,956 → 2,957, the twin's 1° pairs
+/// 2,998 → 2,998 and 2,994 → 2,993 without outliers, 2,980 → 2,981 and 2,990 → 2,991 with
+/// 20 %; the dense rows the same answers to the bit; searches a pair 20.0 → 18.2 on the 1°
+/// pairs without outliers, 58.2 → 54.0 on Edmonton. Since 2026-11-30 the 2 cm pass is gone
+/// too: a round of point-to-line ICP from the guess starts the match ([`SPARSE_START`]), and
+/// the 5 cm pass takes it on; restarts, the coarse search's starts and the slide check's second
+/// match run the 5 cm pass alone.
+pub const SPARSE_SIGMAS: [f64; 1] = [0.05];
+
+/// The second schedule of [`Lorentz::with_lines`]: σ 20 cm first, then 5 and 0.5 cm. At
+/// σ 2 cm a point farther than a few centimetres from its pair barely pulls, so from a guess
+/// 20 cm and 10° off the first pass can settle on whatever few pairs happen to be near (a
+/// corridor's doors one door along); at 20 cm every pair pulls and the scans are brought
+/// together first. It is not the first schedule because with 20 % outliers the wide pass is
+/// pulled aside too and 3 % of synthetic pairs end in another minimum (`twin matchers`).
+pub const WIDE_SIGMAS: [f64; 3] = [0.2, 0.05, 0.005];
+
+/// How far from the guess a loosely fitting answer must have gone for the second schedule to
+/// be tried: 10 cm or 3°. Nearer, the first pass started close enough for its narrow σ.
+pub(super) const WIDE_AFTER: (f64, f64) = (0.1, 0.052_359_877_559_829_89);
+
+/// The restarts of [`Lorentz::with_lines`]: the guess turned by ±8° and ±16°, and moved 15 cm
+/// forward, back, left and right. From guesses σ 20 cm / 10° off the corrected real logs they
+/// raised the share of right answers from 0.85 to 0.91 (`twin matchers`) before the wide
+/// schedule ([`WIDE_SIGMAS`]) ran ahead of them; adding ±24° and 30 cm moves gained 0.003 more,
+/// so they were left out.
+pub const RESTARTS: [Pose2; 8] = [
+    Pose2 {
+        x: 0.0,
+        y: 0.0,
+        theta: 0.139_626_340_159_546_36,
+    },
+    Pose2 {
+        x: 0.0,
+        y: 0.0,
+        theta: -0.139_626_340_159_546_36,
+    },
+    Pose2 {
+        x: 0.0,
+        y: 0.0,
+        theta: 0.279_252_680_319_092_7,
+    },
+    Pose2 {
+        x: 0.0,
+        y: 0.0,
+        theta: -0.279_252_680_319_092_7,
+    },
+    Pose2 {
+        x: 0.15,
+        y: 0.0,
+        theta: 0.0,
+    },
+    Pose2 {
+        x: -0.15,
+        y: 0.0,
+        theta: 0.0,
+    },
+    Pose2 {
+        x: 0.0,
+        y: 0.15,
+        theta: 0.0,
+    },
+    Pose2 {
+        x: 0.0,
+        y: -0.15,
+        theta: 0.0,
+    },
+];
+
+/// The coarse search of [`Lorentz::with_lines`]: ±60 cm and ±30° around the guess
+/// ([`correlative::Window::WIDE`]), its three best headings at least 3° apart. From guesses
+/// σ 20 cm / 10° off the corrected real logs it raised the right answers from 0.9267 to 0.9303
+/// over seeds 1–12 (3,600 pairs) and from 0.9175 to 0.9225 over seeds 13–16, every other row
+/// of `twin matchers` unchanged.
+pub const COARSE: (correlative::Window, usize) = (correlative::Window::WIDE, 3);
+
+/// How far from the guess a trusted answer of [`Lorentz::with_lines`] may lie before the coarse
+/// search's best start is matched too ([`Lorentz::far_slide_m`]): 50 cm. From guesses
+/// σ 20 cm / 10° off the corrected real logs, `lorentz-lines` trusted 19 answers 0.4–3 m off
+/// (or more than 5°) over seeds 1–20 of `twin matchers` (6,000 pairs), all on Freiburg 101's
+/// corridor (its pairs 8–10, 20, 21, 44, 45), each fitting 0.50–0.67 of the current points
+/// where the log's pose fits 0.62–0.84. Checked so: 4 such answers, the right answers
+/// 5,882 → 5,896 (held out, seeds 21–30: 2,939 → 2,946), every other row unchanged to the
+/// bit, the Table 5.1 study too. At 35 cm or 25 cm: 15 or 17 more right answers, at 1.1 or
+/// 1.2 times the row's time (`pl-icp`'s time then: 1.05 times at 35 cm); with the three best
+/// starts, one more or two.
+pub const FAR_SLIDE_M: f64 = 0.5;
+
+/// How much larger a share of the current points a coarse start's trusted answer must fit than
+/// the untrusted first answer to replace it. The coarse search looks up to 60 cm and 30° away,
+/// where a corridor offers look-alike places: on Edmonton's sparse scans, without a margin,
+/// it replaced 8 untrusted right answers in 3,600 by trusted wrong ones that fitted at most
+/// 6 points in 100 more.
+pub(super) const COARSE_MARGIN: f64 = 0.08;
