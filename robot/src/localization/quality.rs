@@ -161,13 +161,50 @@ impl TrustRule {
         pose: &Pose2,
         last: Option<&mut [Option<LastNearest>]>,
     ) -> MatchQuality {
+        // Without a floor the judgement is never given up.
+        self.judge(reference, current, pose, last, None)
+            .unwrap_or(MatchQuality::NONE)
+    }
+
+    /// [`TrustRule::assess_near`] for a pose that matters only if it fits more than `floor`
+    /// current points: `None` as soon as the points left to judge could no longer take its
+    /// inliers past `floor`, else the same quality to the last bit (the points are judged in
+    /// the same order). A slide check's pose, judged only to be turned away nine times in ten
+    /// with a hundred inliers fewer, is given up after a third of its points.
+    pub(super) fn assess_near_above(
+        &self,
+        reference: &Reference,
+        current: &[[f64; 2]],
+        pose: &Pose2,
+        last: Option<&mut [Option<LastNearest>]>,
+        floor: usize,
+    ) -> Option<MatchQuality> {
+        self.judge(reference, current, pose, last, Some(floor))
+    }
+
+    /// The judgement of [`TrustRule::assess_near`], given up as
+    /// [`TrustRule::assess_near_above`] says when `floor` is given.
+    fn judge(
+        &self,
+        reference: &Reference,
+        current: &[[f64; 2]],
+        pose: &Pose2,
+        last: Option<&mut [Option<LastNearest>]>,
+        floor: Option<usize>,
+    ) -> Option<MatchQuality> {
         if current.is_empty() || reference.points.is_empty() {
-            return MatchQuality::NONE;
+            return floor.is_none().then_some(MatchQuality::NONE);
         }
         let mut information = [[0.0f64; 3]; 3];
         let mut gradient = [0.0f64; 3];
         let (mut inliers, mut judged, mut sum2) = (0usize, 0usize, 0.0f64);
-        for constraint in constraints(reference, current, pose, last) {
+        for (seen, constraint) in constraints(reference, current, pose, last).enumerate() {
+            // Every point after this one an inlier would still leave `floor` unbeaten.
+            if let Some(floor) = floor
+                && inliers + (current.len() - seen) <= floor
+            {
+                return None;
+            }
             if !constraint.judged {
                 continue;
             }
@@ -203,14 +240,15 @@ impl TrustRule {
         };
         let step = solve3(information, gradient.map(|g| -g))
             .map_or([f64::INFINITY; 2], |d| [d[0].hypot(d[1]), d[2].abs()]);
-        MatchQuality {
+        let quality = MatchQuality {
             inliers,
             inlier_share: inliers as f64 / judged.max(1) as f64,
             rms_m,
             sigma: [column(0), column(1), column(2)],
             sparse: reference.is_sparse(),
             step,
-        }
+        };
+        floor.is_none_or(|floor| inliers > floor).then_some(quality)
     }
 }
 
@@ -842,6 +880,53 @@ mod tests {
         assert!(
             last.iter().all(Option::is_some),
             "every point was searched for"
+        );
+    }
+
+    /// A judgement given a floor is given up exactly when the pose fits no more than `floor`
+    /// points, and is otherwise the whole judgement to the last bit, at poses that fit all,
+    /// some and none of the points, and with a cache left from other poses.
+    #[test]
+    fn a_judgement_above_a_floor_is_the_judgement_or_nothing() {
+        let rule = TrustRule::default();
+        let reference = reference(&corner());
+        let current: Vec<[f64; 2]> = corner()
+            .iter()
+            .enumerate()
+            .map(|(i, p)| [p[0] + 0.003 * ((i * 7) % 5) as f64, p[1]])
+            .collect();
+        let mut last = vec![None; current.len()];
+        let mut given_up = 0;
+        for pose in [
+            Pose2::IDENTITY,
+            Pose2::new(0.04, 0.0, 0.0),
+            Pose2::new(0.0, 0.08, 0.02),
+            Pose2::new(3.0, -2.0, 1.0),
+        ] {
+            let whole = rule.assess(&reference, &current, &pose);
+            for floor in [
+                0,
+                whole.inliers / 2,
+                whole.inliers.saturating_sub(1),
+                whole.inliers,
+            ]
+            .into_iter()
+            .chain([whole.inliers + 1, current.len()])
+            {
+                let above =
+                    rule.assess_near_above(&reference, &current, &pose, Some(&mut last), floor);
+                if whole.inliers > floor {
+                    assert_eq!(above, Some(whole), "{pose:?}, floor {floor}");
+                } else {
+                    assert_eq!(above, None, "{pose:?}, floor {floor}");
+                    given_up += 1;
+                }
+            }
+        }
+        assert!(given_up >= 8, "{given_up}");
+        assert_eq!(
+            rule.assess_near_above(&reference, &[], &Pose2::IDENTITY, None, 0),
+            None
         );
     }
 

@@ -656,8 +656,11 @@ impl Lorentz {
         let start = Pose2::new(p.x + vote.shift_m * ux, p.y + vote.shift_m * uy, p.theta);
         // The vote counts only the points it recruits; the judgement there weighs them against
         // the points the shift carries off their surfaces (or onto others), before a match.
-        let there = rule.assess_near(reference, &current.xy, &start, Some(&mut *last));
-        if there.inliers <= matched.quality.inliers {
+        let floor = matched.quality.inliers;
+        if rule
+            .assess_near_above(reference, &current.xy, &start, Some(&mut *last), floor)
+            .is_none()
+        {
             return matched;
         }
         let spread = self.spread_for(dense);
