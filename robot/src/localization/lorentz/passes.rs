@@ -71,9 +71,11 @@ impl Crowding {
     }
 }
 
-/// Line-assisted association: the reference's local lines ([`lines_of`](crate::localization::lines::lines_of)), the margin past a
+/// Line-assisted association: the reference's local lines ([`lines_of`]), the margin past a
 /// segment's ends a projection may reach, and when the pairs projected inside a line count
 /// their distance to it alone ([`Lorentz::line_residuals_spread`], for dense scans).
+///
+/// [`lines_of`]: crate::localization::lines::lines_of
 pub(super) struct Assist<'a> {
     pub(super) lines: &'a [Option<Line>],
     pub(super) margin: f64,
