@@ -37,9 +37,9 @@ pub use level::{LEVEL_TOLERANCE_RAD, LevelLocaliser};
 pub use lorentz::{
     COARSE, CROWD_RATIO, DENSE_SIGMAS, EARLY_CONVERGENCE, FAR_SLIDE_M, FIRST_PASS_CONVERGENCE,
     FIRST_PASS_ENOUGH, FIRST_PASS_SURFACE_POINTS, FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS,
-    LINE_RESIDUALS_SPREAD, Lorentz, POLISH_MORE, SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE,
-    SPARSE_FINISH, SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_SIGMAS, SPARSE_START, SlideCheck,
-    StartRounds, THESIS_SIGMAS, WIDE_SIGMAS,
+    LINE_RESIDUALS_SPREAD, Lorentz, POLISH_MORE, QuickFinish, SLIDE_CHECK,
+    SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH, SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_QUICK,
+    SPARSE_SIGMAS, SPARSE_START, SlideCheck, StartRounds, THESIS_SIGMAS, WIDE_SIGMAS,
 };
 pub use map::{MapBuilder, MapConfig, MatchStats, Placed};
 pub use matcher::{
@@ -47,6 +47,6 @@ pub use matcher::{
     UnknownMatcher, plausible,
 };
 pub use mbicp::Mbicp;
-pub use plicp::PointToLine;
+pub use plicp::{GiveUp, PointToLine};
 pub use quality::{MatchQuality, TrustRule, polish};
 pub use scan::{RangeScan, SPARSE_BEAM_STEP_RAD, ScanPoints, beam_step, beam_step_below};

@@ -95,14 +95,46 @@ struct Candidate {
     d2: f64,
 }
 
+/// What [`PointToLine::refine_settled`] found: the answer, the estimate after the first
+/// iteration, the iterations, whether the step fell under `convergence` before the cap, and
+/// the pairs of the last iteration.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub(super) struct Refined {
+    pub pose: Pose2,
+    pub first: Pose2,
+    pub iterations: u32,
+    pub settled: bool,
+    pub kept: usize,
+    pub given_up: bool,
+}
+
+/// When a point-to-line loop gives up (a quick finish's, [`QuickFinish::give_up`]): at the end
+/// of iteration `after`, when under `below_share` of the current points lie within `within_m`
+/// of their reference segments (the answer would fit too few of them to be worth finishing).
+///
+/// [`QuickFinish::give_up`]: super::QuickFinish::give_up
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct GiveUp {
+    /// The iteration that decides.
+    pub after: u32,
+    /// How near its segment a point must lie, metres …
+    pub within_m: f64,
+    /// … and the least share of the current points that must.
+    pub below_share: f64,
+}
+
 /// What one run of the loop found.
 struct Loop {
     pose: Pose2,
+    /// The estimate after the first iteration (`pose` when there was none).
+    first: Pose2,
     /// Sum of the kept pairs' distances to their segments at the last pairing, metres.
     error: f64,
     kept: usize,
     iterations: u32,
     settled: bool,
+    /// Whether the loop gave up ([`GiveUp`]).
+    given_up: bool,
 }
 
 impl ScanMatcher for PointToLine {
@@ -162,25 +194,52 @@ impl PointToLine {
         start: Pose2,
         last: &mut [Option<LastNearest>],
     ) -> (Pose2, u32) {
-        let found = self.run_with(reference, current, start, last);
-        let pose = found.pose;
-        (
-            Pose2::new(pose.x, pose.y, wrap_angle(pose.theta)),
-            found.iterations,
-        )
+        let found = self.refine_settled(reference, current, start, None, last);
+        (found.pose, found.iterations)
+    }
+
+    /// [`refine`](Self::refine), with the estimate after its first iteration (what the same
+    /// loop capped at one iteration would answer), whether it settled and its last pairs;
+    /// given up as `give_up` says.
+    pub(super) fn refine_settled(
+        &self,
+        reference: &Reference,
+        current: &ScanPoints,
+        start: Pose2,
+        give_up: Option<GiveUp>,
+        last: &mut [Option<LastNearest>],
+    ) -> Refined {
+        let found = self.run_with(reference, current, start, give_up, last);
+        let wrapped = |p: Pose2| Pose2::new(p.x, p.y, wrap_angle(p.theta));
+        Refined {
+            pose: wrapped(found.pose),
+            first: wrapped(found.first),
+            iterations: found.iterations,
+            settled: found.settled,
+            kept: found.kept,
+            given_up: found.given_up,
+        }
     }
 
     /// The loop from `start`: pair, trim, minimise, until the step is tiny.
     fn run(&self, reference: &Reference, current: &ScanPoints, start: Pose2) -> Loop {
-        self.run_with(reference, current, start, &mut vec![None; current.len()])
+        self.run_with(
+            reference,
+            current,
+            start,
+            None,
+            &mut vec![None; current.len()],
+        )
     }
 
-    /// [`run`](Self::run), its nearest-point searches starting from `last`.
+    /// [`run`](Self::run), its nearest-point searches starting from `last`, given up as
+    /// `give_up` says.
     fn run_with(
         &self,
         reference: &Reference,
         current: &ScanPoints,
         start: Pose2,
+        give_up: Option<GiveUp>,
         last: &mut [Option<LastNearest>],
     ) -> Loop {
         let mut pose = start;
@@ -196,10 +255,12 @@ impl PointToLine {
         let gate = self.max_correspondence_m * self.max_correspondence_m;
         let mut found = Loop {
             pose,
+            first: pose,
             error: 0.0,
             kept: 0,
             iterations: 0,
             settled: false,
+            given_up: false,
         };
         let refs = &reference.points.xy;
         for iteration in 1..=self.convergence.max_iterations {
@@ -291,12 +352,25 @@ impl PointToLine {
             }
             pose = next;
             found.pose = pose;
+            if iteration == 1 {
+                found.first = pose;
+            }
             if self.convergence.reached(&step) {
                 found.settled = true;
                 break;
             }
             if cycled {
                 break;
+            }
+            if let Some(g) = give_up.filter(|g| g.after == iteration) {
+                let near = candidates
+                    .iter()
+                    .filter(|c| c.segment <= g.within_m)
+                    .count();
+                if (near as f64) < g.below_share * current.len() as f64 {
+                    found.given_up = true;
+                    break;
+                }
             }
         }
         found
@@ -386,6 +460,66 @@ mod tests {
         assert!(off.x.hypot(off.y) < 1e-3, "{result:?}");
         assert!(off.theta.abs() < 1e-4, "{result:?}");
         assert!(result.converged, "{result:?}");
+    }
+
+    /// A refinement's first round is the same loop capped at one iteration, to the bit; it gives
+    /// up after the round `GiveUp` names when too few points lie near their lines (a current
+    /// scan of another room), and not when they do.
+    #[test]
+    fn a_refinement_keeps_its_first_round_and_gives_up_on_a_poor_fit() {
+        let truth = Pose2::new(0.12, -0.05, 0.04);
+        let reference = Reference::new(room(Pose2::IDENTITY));
+        let current = room(truth);
+        let icp = PointToLine {
+            gauss_newton_steps: 1,
+            restart_above_m: None,
+            ..PointToLine::default()
+        };
+        let capped = PointToLine {
+            convergence: Convergence {
+                max_iterations: 1,
+                ..icp.convergence
+            },
+            ..icp
+        };
+        let fresh = || vec![None; current.len()];
+        let found = icp.refine_settled(&reference, &current, Pose2::IDENTITY, None, &mut fresh());
+        let (one, rounds) = capped.refine(&reference, &current, Pose2::IDENTITY, &mut fresh());
+        assert_eq!((found.first, rounds), (one, 1));
+        assert!(
+            found.settled && !found.given_up && found.iterations > 1,
+            "{found:?}"
+        );
+        let off = truth.relative(&found.pose);
+        assert!(off.x.hypot(off.y) < 1e-3, "{found:?}");
+        let give_up = GiveUp {
+            after: 2,
+            within_m: 0.05,
+            below_share: 0.75,
+        };
+        let kept = icp.refine_settled(
+            &reference,
+            &current,
+            Pose2::IDENTITY,
+            Some(give_up),
+            &mut fresh(),
+        );
+        assert_eq!(kept, found);
+        // Half the current points 30 cm beyond the walls: too few near their lines.
+        let mut elsewhere = current.clone();
+        for p in elsewhere.xy.iter_mut().step_by(2) {
+            let r = p[0].hypot(p[1]);
+            *p = [p[0] * (r + 0.3) / r, p[1] * (r + 0.3) / r];
+        }
+        let mut last = vec![None; elsewhere.len()];
+        let poor = icp.refine_settled(
+            &reference,
+            &elsewhere,
+            Pose2::IDENTITY,
+            Some(give_up),
+            &mut last,
+        );
+        assert!(poor.given_up && poor.iterations == 2, "{poor:?}");
     }
 
     /// With ranges off by up to 6 cm, the mean distance to the lines is above a centimetre: the

@@ -163,7 +163,22 @@ impl TrustRule {
     ) -> MatchQuality {
         // Without a floor the judgement is never given up.
         self.judge(reference, current, pose, last, None)
-            .unwrap_or(MatchQuality::NONE)
+            .map_or(MatchQuality::NONE, |(quality, _)| quality)
+    }
+
+    /// [`TrustRule::assess_near`], and the σ of the position along the direction the inliers
+    /// hold it least (the square root of the larger eigenvalue of the position's covariance,
+    /// metres; infinite where they leave a direction free). `sigma`'s x and y are that
+    /// covariance's diagonal: along a wall at 45° both read a fraction of this one.
+    pub(super) fn assess_near_weakest(
+        &self,
+        reference: &Reference,
+        current: &[[f64; 2]],
+        pose: &Pose2,
+        last: Option<&mut [Option<LastNearest>]>,
+    ) -> (MatchQuality, f64) {
+        self.judge(reference, current, pose, last, None)
+            .unwrap_or((MatchQuality::NONE, f64::INFINITY))
     }
 
     /// [`TrustRule::assess_near`] for a pose that matters only if it fits more than `floor`
@@ -180,9 +195,10 @@ impl TrustRule {
         floor: usize,
     ) -> Option<MatchQuality> {
         self.judge(reference, current, pose, last, Some(floor))
+            .map(|(quality, _)| quality)
     }
 
-    /// The judgement of [`TrustRule::assess_near`], given up as
+    /// The judgement of [`TrustRule::assess_near_weakest`], given up as
     /// [`TrustRule::assess_near_above`] says when `floor` is given.
     fn judge(
         &self,
@@ -191,9 +207,11 @@ impl TrustRule {
         pose: &Pose2,
         last: Option<&mut [Option<LastNearest>]>,
         floor: Option<usize>,
-    ) -> Option<MatchQuality> {
+    ) -> Option<(MatchQuality, f64)> {
         if current.is_empty() || reference.points.is_empty() {
-            return floor.is_none().then_some(MatchQuality::NONE);
+            return floor
+                .is_none()
+                .then_some((MatchQuality::NONE, f64::INFINITY));
         }
         let mut information = [[0.0f64; 3]; 3];
         let mut gradient = [0.0f64; 3];
@@ -233,10 +251,21 @@ impl TrustRule {
         // The residual's scale, no smaller than a millimetre (a perfect synthetic fit would
         // otherwise claim certainty).
         let scale2 = rms_m.max(1e-3).powi(2);
-        let column = |k: usize| {
+        let covariance = |k: usize| {
             let mut e = [0.0; 3];
             e[k] = 1.0;
-            solve3(information, e).map_or(f64::INFINITY, |x| (x[k] * scale2).max(0.0).sqrt())
+            solve3(information, e).map(|x| x.map(|v| v * scale2))
+        };
+        let columns = [covariance(0), covariance(1), covariance(2)];
+        let column =
+            |k: usize| columns[k].map_or(f64::INFINITY, |x: [f64; 3]| x[k].max(0.0).sqrt());
+        // The position's covariance [[a, b], [b, c]] and its larger eigenvalue.
+        let weakest = match (columns[0], columns[1]) {
+            (Some([a, b, _]), Some([_, c, _])) => {
+                let half = 0.5 * (a - c);
+                (0.5 * (a + c) + half.hypot(b)).max(0.0).sqrt()
+            }
+            _ => f64::INFINITY,
         };
         let step = solve3(information, gradient.map(|g| -g))
             .map_or([f64::INFINITY; 2], |d| [d[0].hypot(d[1]), d[2].abs()]);
@@ -248,7 +277,9 @@ impl TrustRule {
             sparse: reference.is_sparse(),
             step,
         };
-        floor.is_none_or(|floor| inliers > floor).then_some(quality)
+        floor
+            .is_none_or(|floor| inliers > floor)
+            .then_some((quality, weakest))
     }
 }
 
@@ -838,6 +869,49 @@ mod tests {
         assert!(q.inlier_share > 0.99, "{q:?}");
         assert!(q.sigma[0] > 1.0, "{q:?}");
         assert!(!rule.trusts(&q));
+    }
+
+    /// The position's weakest σ is the larger axis of its covariance, whatever the axes: a
+    /// corridor 3 m long with a short end wall, turned 45°, reads the same weakest σ as
+    /// unturned, where its x and y σ share it (each about 1/√2 of it); and the judgement is
+    /// the same as [`TrustRule::assess`]'s to the bit.
+    #[test]
+    fn the_weakest_direction_is_read_whatever_the_axes() {
+        let rule = TrustRule::default();
+        let corridor = |turn: f64| {
+            let (s, c) = turn.sin_cos();
+            let mut points: Vec<[f64; 2]> =
+                (0..75).map(|i| [-1.0 + 0.04 * i as f64, 1.0]).collect();
+            points.extend((0..10).map(|i| [2.0, 0.9 - 0.04 * i as f64]));
+            points.extend((0..75).map(|i| [2.0 - 0.04 * i as f64, -1.0]));
+            // Millimetres of noise, so that the σ are not the floor's.
+            for (k, p) in points.iter_mut().enumerate() {
+                p[1] += 0.004 * ((k as f64 * 0.618_034).fract() - 0.5);
+            }
+            let turned: Vec<[f64; 2]> = points
+                .iter()
+                .map(|p| [c * p[0] - s * p[1], s * p[0] + c * p[1]])
+                .collect();
+            turned
+        };
+        let weakest = |points: &[[f64; 2]]| {
+            let r = reference(points);
+            let (q, w) = rule.assess_near_weakest(&r, points, &Pose2::IDENTITY, None);
+            assert_eq!(q, rule.assess(&r, points, &Pose2::IDENTITY));
+            (q, w)
+        };
+        let (along, w0) = weakest(&corridor(0.0));
+        let (turned, w45) = weakest(&corridor(std::f64::consts::FRAC_PI_4));
+        assert!(w0.is_finite() && w0 > 0.0, "{w0}");
+        assert!((w45 / w0 - 1.0).abs() < 0.05, "{w0} {w45}");
+        // Along the unturned corridor the weakest is x's; turned, x and y each hold ~0.7 of it.
+        assert!((along.sigma[0] / w0 - 1.0).abs() < 0.05, "{along:?} {w0}");
+        for k in 0..2 {
+            let share = turned.sigma[k] / w45;
+            assert!((0.6..0.8).contains(&share), "{turned:?} {w45}");
+        }
+        let none = rule.assess_near_weakest(&reference(&[]), &[], &Pose2::IDENTITY, None);
+        assert_eq!(none, (MatchQuality::NONE, f64::INFINITY));
     }
 
     /// The polish and the judgement answer the same, to the last bit, whether each point's

@@ -18,9 +18,9 @@ mod settings;
 pub use settings::{
     COARSE, CROWD_RATIO, DENSE_SIGMAS, EARLY_CONVERGENCE, FAR_SLIDE_M, FIRST_PASS_CONVERGENCE,
     FIRST_PASS_ENOUGH, FIRST_PASS_SURFACE_POINTS, FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS,
-    LINE_RESIDUALS_SPREAD, POLISH_MORE, RESTARTS, SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE,
-    SPARSE_FINISH, SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_SIGMAS, SPARSE_START, SlideCheck,
-    StartRounds, THESIS_SIGMAS, WIDE_SIGMAS,
+    LINE_RESIDUALS_SPREAD, POLISH_MORE, QuickFinish, RESTARTS, SLIDE_CHECK,
+    SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH, SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_QUICK,
+    SPARSE_SIGMAS, SPARSE_START, SlideCheck, StartRounds, THESIS_SIGMAS, WIDE_SIGMAS,
 };
 
 use super::correlative;
@@ -229,6 +229,13 @@ pub struct Lorentz {
     /// thesis; `None` (the default) starts at the guess, and [`Lorentz::with_lines`] has
     /// [`SPARSE_START`].
     pub sparse_start: Option<StartRounds>,
+    /// For sparse scans (not dense, as `dense_sigmas_m`): before anything else, this
+    /// point-to-line ICP runs from the guess, and its answer ends the match when it passes the
+    /// [`QuickFinish`]'s tests (checked for a slide as `sparse_slide_check` says); otherwise
+    /// the match goes on from `sparse_start`'s round, which is that ICP's first. Not in the
+    /// thesis; `None` (the default) always runs the whole match, and [`Lorentz::with_lines`]
+    /// has [`SPARSE_QUICK`].
+    pub sparse_quick: Option<QuickFinish>,
     /// For dense scans (as `dense_sigmas_m`): a trusted answer is checked along the direction
     /// its inliers hold it least ([`SlideCheck`]). Not in the thesis; `None` (the default)
     /// leaves it out, and [`Lorentz::with_lines`] has [`SLIDE_CHECK`].
@@ -280,6 +287,7 @@ impl Lorentz {
             crowd_ratio: Some(CROWD_RATIO),
             sparse_finish: Some(SPARSE_FINISH),
             sparse_start: Some(SPARSE_START),
+            sparse_quick: Some(SPARSE_QUICK),
             slide_check: Some(SLIDE_CHECK),
             sparse_slide_check: Some(SLIDE_CHECK),
             ..Lorentz::default()
@@ -328,6 +336,7 @@ impl Default for Lorentz {
             sparse_early_convergence: None,
             sparse_finish: None,
             sparse_start: None,
+            sparse_quick: None,
             slide_check: None,
             sparse_slide_check: None,
         }
@@ -352,46 +361,128 @@ impl ScanMatcher for Lorentz {
         // Each current point's last nearest reference point, for every search of the match.
         let mut last = vec![None; current.len()];
         let dense = self.is_dense(current);
+        let scans = (reference, current);
+        // A sparse pair that point-to-line ICP alone settles ends here; else its first round
+        // is the start's.
+        let mut first_round = None;
+        if let Some(quick) = self.sparse_quick.filter(|_| !dense) {
+            match self.quick(&quick, scans, guess, &mut last) {
+                Ok(matched) => return self.checked(scans, None, dense, matched, &mut last),
+                Err(left) => first_round = Some(left),
+            }
+        }
         // The reference's lines, grown once for every match from here.
         let grown = self
             .lines
             .as_ref()
             .map(|params| lines_of(&reference.points.xy, params));
         let grown = grown.as_deref();
-        let scans = (reference, current);
-        let (start, rounds) = self.start(scans, dense, guess, &mut last);
+        let (start, rounds) = self.start(scans, dense, guess, first_round, &mut last);
         let mut matched = self.match_from(scans, grown, dense, start, &mut last);
         matched.iterations += rounds;
         let matched = self.finished(scans, dense, matched, &mut last);
+        self.checked(scans, grown, dense, matched, &mut last)
+    }
+}
+
+/// What a quick finish that did not end the match leaves the rest of it: the estimate after
+/// its first round, and the rounds it made.
+#[derive(Copy, Clone, Debug)]
+struct FirstRound {
+    pose: Pose2,
+    rounds: u32,
+}
+
+impl Lorentz {
+    /// Where the σ passes start from `guess` ([`Lorentz::sparse_start`], on a sparse scan:
+    /// not `dense`), and the rounds that took. A quick finish's `first_round` counts as the
+    /// start's round when the start is that round of the same ICP.
+    fn start(
+        &self,
+        (reference, current): (&Reference, &ScanPoints),
+        dense: bool,
+        guess: Pose2,
+        first_round: Option<FirstRound>,
+        last: &mut [Option<LastNearest>],
+    ) -> (Pose2, u32) {
+        let Some(start) = self.sparse_start.filter(|_| !dense) else {
+            return (guess, first_round.map_or(0, |f| f.rounds));
+        };
+        let reused = first_round.filter(|_| {
+            self.sparse_quick
+                .is_some_and(|quick| is_first_round_of(&start.icp, &quick.icp))
+        });
+        let (pose, rounds) = match (reused, first_round) {
+            (Some(first), _) => (first.pose, first.rounds),
+            (None, earlier) => {
+                let (pose, rounds) = start.icp.refine(reference, current, guess, last);
+                (pose, rounds + earlier.map_or(0, |f| f.rounds))
+            }
+        };
+        let moved = guess.relative(&pose);
+        let near = moved.x.hypot(moved.y) <= start.reach_m && moved.theta.abs() <= start.reach_rad;
+        (if near { pose } else { guess }, rounds)
+    }
+
+    /// The quick finish ([`Lorentz::sparse_quick`]): `quick.icp` from `guess`, judged by the
+    /// trust rule; its answer when it passes `quick`'s tests, else its first round.
+    fn quick(
+        &self,
+        quick: &QuickFinish,
+        (reference, current): (&Reference, &ScanPoints),
+        guess: Pose2,
+        last: &mut [Option<LastNearest>],
+    ) -> Result<MatchResult, FirstRound> {
+        let found = quick
+            .icp
+            .refine_settled(reference, current, guess, Some(quick.give_up), last);
+        if found.given_up {
+            return Err(FirstRound {
+                pose: found.first,
+                rounds: found.iterations,
+            });
+        }
+        let rule = TrustRule::default();
+        let (quality, weakest_m) =
+            rule.assess_near_weakest(reference, &current.xy, &found.pose, Some(last));
+        let pinned = weakest_m <= quick.max_sigma_m && quality.sigma[2] <= quick.max_sigma_rad;
+        if rule.trusts(&quality) && quality.inlier_share >= quick.min_inlier_share && pinned {
+            Ok(MatchResult {
+                pose: found.pose,
+                iterations: found.iterations,
+                settled: found.settled,
+                correspondences: found.kept,
+                quality,
+                ..MatchResult::unmatched(guess)
+            })
+        } else {
+            Err(FirstRound {
+                pose: found.first,
+                rounds: found.iterations,
+            })
+        }
+    }
+
+    /// `matched`, checked for a slide as [`Lorentz::slide_check`] (on a `dense` scan) or
+    /// [`Lorentz::sparse_slide_check`] says, when the matcher has one; `grown` as in
+    /// [`Lorentz::check_slide`].
+    fn checked(
+        &self,
+        scans: (&Reference, &ScanPoints),
+        grown: Option<&[Option<Line>]>,
+        dense: bool,
+        matched: MatchResult,
+        last: &mut [Option<LastNearest>],
+    ) -> MatchResult {
         let check = if dense {
             &self.slide_check
         } else {
             &self.sparse_slide_check
         };
         match check {
-            Some(check) => self.check_slide(check, scans, grown, dense, matched, &mut last),
+            Some(check) => self.check_slide(check, scans, grown, dense, matched, last),
             None => matched,
         }
-    }
-}
-
-impl Lorentz {
-    /// Where the σ passes start from `guess` ([`Lorentz::sparse_start`], on a sparse scan:
-    /// not `dense`), and the rounds that took.
-    fn start(
-        &self,
-        (reference, current): (&Reference, &ScanPoints),
-        dense: bool,
-        guess: Pose2,
-        last: &mut [Option<LastNearest>],
-    ) -> (Pose2, u32) {
-        let Some(start) = self.sparse_start.filter(|_| !dense) else {
-            return (guess, 0);
-        };
-        let (pose, rounds) = start.icp.refine(reference, current, guess, last);
-        let moved = guess.relative(&pose);
-        let near = moved.x.hypot(moved.y) <= start.reach_m && moved.theta.abs() <= start.reach_rad;
-        (if near { pose } else { guess }, rounds)
     }
 
     /// The match from `guess`: the σ passes, and when their answer is loose or untrusted the
@@ -621,7 +712,8 @@ impl Lorentz {
         })
     }
 
-    /// The match's answer `matched` (finished, on a sparse scan), checked as `check` says
+    /// The match's answer `matched` (finished, on a sparse scan; or a quick finish's), checked
+    /// as `check` says
     /// ([`SlideCheck`]): where the points off their surfaces across its weakest direction would
     /// have it, and where the trust rule finds more inliers than at `matched`, the σ passes of
     /// a `dense` or sparse scan (on the lines `grown`) from there, finished as `matched` was,
@@ -664,7 +756,15 @@ impl Lorentz {
             return matched;
         }
         let spread = self.spread_for(dense);
-        let lines = self.assist(grown, spread);
+        // Lines not grown yet (a quick finish's answer) are grown now, for the match again.
+        let grown_here = match grown {
+            Some(_) => None,
+            None => self
+                .lines
+                .as_ref()
+                .map(|params| lines_of(&reference.points.xy, params)),
+        };
+        let lines = self.assist(grown.or(grown_here.as_deref()), spread);
         let steps = self.first_max_steps.unwrap_or(self.max_steps);
         let crowd = self.crowd_ratio.filter(|_| dense);
         let again = self.passes(
@@ -763,6 +863,18 @@ impl Lorentz {
         !self.dense_sigmas_m.is_empty()
             && beam_step_below(current, self.dense_below_rad) == Some(true)
     }
+}
+
+/// Whether `start`'s single round is `icp`'s first: the same loop, capped at one iteration.
+fn is_first_round_of(start: &PointToLine, icp: &PointToLine) -> bool {
+    let capped = PointToLine {
+        convergence: Convergence {
+            max_iterations: 1,
+            ..icp.convergence
+        },
+        ..*icp
+    };
+    start.convergence.max_iterations == 1 && *start == capped
 }
 
 #[cfg(test)]
