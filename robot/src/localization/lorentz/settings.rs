@@ -93,10 +93,11 @@ pub struct QuickFinish {
 /// answers recorded with it always kept (when trusted) and without it, sifted offline: over
 /// seeds 1–40 (12,000 pairs a row) 85 % / 0.1° / 2.5 mm lost no pair on any row and gained
 /// one, where 3 mm lost two and 0.15° lost seven (the notebook, *2026-12-01*).
-/// As built (`twin matchers --matchers lorentz-lines --seeds 10`, seeds 1, 11 and 21): the 1°
-/// pairs without outliers right on 8,992 → 8,993 of 9,000, with 20 % 8,968 the same, 1,136–1,152
-/// answers a seed set moved on the first and 10–19 on the second, every other row the same
-/// answers to the bit; the first row's median error 2.49 → 2.55 mm, its 95th percentile 6.3 →
+/// As built (`twin matchers --matchers lorentz-lines --seeds 10` from seeds 1, 11, 21, 31, 61,
+/// 71 and 81, 21,000 pairs a row, 61–90 never used in choosing): the 1° pairs without outliers
+/// right on one pair more and none fewer, with 20 % on the same pairs, 1,115–1,164 answers a
+/// ten-seed set moved on the first and 10–19 on the second, every other row the same answers
+/// to the bit; the first row's median error 2.49 → 2.55 mm, its 95th percentile 6.3 →
 /// 6.8 mm (seeds 1–20). `cargo bench --bench matcher_race`: that row 1.40 → 0.91–0.93 of
 /// `pl-icp`'s time by the median pair (1.02 → 0.79–0.80 over the row), two thirds of its pairs
 /// ending early; the given-up rounds cost the large guesses 0.87–0.89 → 0.92–0.93, the rest
