@@ -98,9 +98,9 @@ pub struct QuickFinish {
 /// right on one pair more and none fewer, with 20 % on the same pairs, 1,115–1,164 answers a
 /// ten-seed set moved on the first and 10–19 on the second, every other row the same answers
 /// to the bit; the first row's median error 2.49 → 2.55 mm, its 95th percentile 6.3 →
-/// 6.8 mm (seeds 1–20). `cargo bench --bench matcher_race`: that row 1.40 → 0.91–0.93 of
+/// 6.8 mm (seeds 1–20). `cargo bench --bench matcher_race`: that row 1.40 → 0.91–0.96 of
 /// `pl-icp`'s time by the median pair (1.02 → 0.79–0.80 over the row), two thirds of its pairs
-/// ending early; the given-up rounds cost the large guesses 0.87–0.89 → 0.92–0.93, the rest
+/// ending early; the given-up rounds cost the large guesses up to 0.87–0.89 → 0.92–0.93, the rest
 /// within the host's swing.
 pub const SPARSE_QUICK: QuickFinish = QuickFinish {
     icp: SPARSE_FINISH,
