@@ -259,11 +259,16 @@ impl TrustRule {
         let columns = [covariance(0), covariance(1), covariance(2)];
         let column =
             |k: usize| columns[k].map_or(f64::INFINITY, |x: [f64; 3]| x[k].max(0.0).sqrt());
-        // The position's covariance [[a, b], [b, c]] and its larger eigenvalue.
+        // The position's covariance [[a, b], [b, c]] and its larger eigenvalue; a NaN (which
+        // `max` would turn to 0) reads as free.
         let weakest = match (columns[0], columns[1]) {
             (Some([a, b, _]), Some([_, c, _])) => {
-                let half = 0.5 * (a - c);
-                (0.5 * (a + c) + half.hypot(b)).max(0.0).sqrt()
+                let larger = 0.5 * (a + c) + (0.5 * (a - c)).hypot(b);
+                if larger.is_nan() {
+                    f64::INFINITY
+                } else {
+                    larger.max(0.0).sqrt()
+                }
             }
             _ => f64::INFINITY,
         };

@@ -408,13 +408,12 @@ impl Lorentz {
         let Some(start) = self.sparse_start.filter(|_| !dense) else {
             return (guess, first_round.map_or(0, |f| f.rounds));
         };
-        let reused = first_round.filter(|_| {
-            self.sparse_quick
-                .is_some_and(|quick| is_first_round_of(&start.icp, &quick.icp))
-        });
-        let (pose, rounds) = match (reused, first_round) {
-            (Some(first), _) => (first.pose, first.rounds),
-            (None, earlier) => {
+        let reusable = self
+            .sparse_quick
+            .is_some_and(|quick| is_first_round_of(&start.icp, &quick.icp));
+        let (pose, rounds) = match first_round {
+            Some(first) if reusable => (first.pose, first.rounds),
+            earlier => {
                 let (pose, rounds) = start.icp.refine(reference, current, guess, last);
                 (pose, rounds + earlier.map_or(0, |f| f.rounds))
             }
@@ -436,11 +435,12 @@ impl Lorentz {
         let found = quick
             .icp
             .refine_settled(reference, current, guess, Some(quick.give_up), last);
+        let left = FirstRound {
+            pose: found.first,
+            rounds: found.iterations,
+        };
         if found.given_up {
-            return Err(FirstRound {
-                pose: found.first,
-                rounds: found.iterations,
-            });
+            return Err(left);
         }
         let rule = TrustRule::default();
         let (quality, weakest_m) =
@@ -456,10 +456,7 @@ impl Lorentz {
                 ..MatchResult::unmatched(guess)
             })
         } else {
-            Err(FirstRound {
-                pose: found.first,
-                rounds: found.iterations,
-            })
+            Err(left)
         }
     }
 

@@ -61,9 +61,10 @@ pub const SPARSE_START: StartRounds = StartRounds {
 /// When a sparse match ends early ([`Lorentz::sparse_quick`]): `icp` runs from the guess, and
 /// its answer is the match's (checked for a slide, [`Lorentz::sparse_slide_check`]) when the
 /// trust rule trusts it, it fits at least `min_inlier_share` of the current points and the
-/// inliers pin it down to `max_sigma_m` in x and in y and `max_sigma_rad` in heading (the
-/// trust rule's σ, [`MatchQuality::sigma`]); otherwise the match goes on as if it had not run,
-/// from its first round ([`SPARSE_START`] is that round).
+/// inliers pin it down to `max_sigma_m` along its weakest direction (the larger axis of the
+/// position's covariance) and `max_sigma_rad` in heading (the trust rule's σ,
+/// [`MatchQuality::sigma`]); otherwise the match goes on as if it had not run, from its first
+/// round ([`SPARSE_START`] is that round). `icp` gives up early as `give_up` says.
 ///
 /// [`MatchQuality::sigma`]: crate::localization::MatchQuality::sigma
 #[derive(Copy, Clone, Debug, PartialEq)]
@@ -72,7 +73,7 @@ pub struct QuickFinish {
     pub icp: PointToLine,
     /// The least share of the current points its answer must fit.
     pub min_inlier_share: f64,
-    /// The largest σ of its x and of its y, metres …
+    /// The largest σ of its position along its weakest direction, metres …
     pub max_sigma_m: f64,
     /// … and of its heading, radians.
     pub max_sigma_rad: f64,
