@@ -10,7 +10,8 @@
 //! matchers`.
 //!
 //! `cargo bench --bench matcher_race` (`RACE_ROUNDS`, default 5, sets the rounds; `RACE_ROW`,
-//! a part of a row's name such as `1°, 0`, races that row alone)
+//! a part of a row's name such as `1°, 0`, races that row alone; `RACE_CSV=DIR` writes each
+//! raced row's pairs with their two best times, microseconds, to `DIR/<row>.csv`)
 
 use robot::localization::{MatcherKind, Reference};
 use sim::commands::matchers;
@@ -66,6 +67,15 @@ fn main() {
         let (ll, pl) = (median(0), median(1));
         let whole = |k: usize| best.iter().map(|b| b[k]).sum::<f64>();
         let sooner = best.iter().filter(|b| b[0] < b[1]).count();
+        if let Ok(dir) = std::env::var("RACE_CSV") {
+            let mut csv = String::from("pair,lorentz_lines_us,pl_icp_us\n");
+            for (pair, b) in best.iter().enumerate() {
+                csv += &format!("{pair},{:.1},{:.1}\n", b[0], b[1]);
+            }
+            let file =
+                Path::new(&dir).join(format!("{}.csv", set.name.replace([' ', ',', '/'], "_")));
+            std::fs::write(&file, csv).expect("RACE_CSV names a writable folder");
+        }
         println!(
             "| {} | {:.0} µs | {:.0} µs | {:.3} | {:.3} | {:.2} |",
             set.name,

@@ -16,11 +16,11 @@ mod passes;
 mod settings;
 
 pub use settings::{
-    COARSE, CROWD_RATIO, DENSE_SIGMAS, EARLY_CONVERGENCE, FAR_SLIDE_M, FIRST_PASS_CONVERGENCE,
-    FIRST_PASS_ENOUGH, FIRST_PASS_SURFACE_POINTS, FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS,
-    LINE_RESIDUALS_SPREAD, POLISH_MORE, QuickFinish, RESTARTS, SLIDE_CHECK,
-    SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH, SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_QUICK,
-    SPARSE_SIGMAS, SPARSE_START, SlideCheck, StartRounds, THESIS_SIGMAS, WIDE_SIGMAS,
+    COARSE, CROWD_RATIO, DENSE_SIGMAS, EARLY_CONVERGENCE, FAR_SLIDE_M, FIRST_MATCH_CONVERGENCE,
+    FIRST_PASS_CONVERGENCE, FIRST_PASS_ENOUGH, FIRST_PASS_SURFACE_POINTS, FIRST_SPREAD,
+    FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD, POLISH_MORE, QuickFinish, RESTARTS,
+    SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH, SPARSE_LINE_RESIDUALS_SPREAD,
+    SPARSE_QUICK, SPARSE_SIGMAS, SPARSE_START, SlideCheck, StartRounds, THESIS_SIGMAS, WIDE_SIGMAS,
 };
 
 use super::correlative;
@@ -209,6 +209,13 @@ pub struct Lorentz {
     /// in the thesis; `None` (the default) stops it as the other passes before the last, and
     /// [`Lorentz::with_lines`] has [`FIRST_PASS_CONVERGENCE`].
     pub first_pass_convergence: Option<Convergence>,
+    /// For dense scans, as `first_pass_convergence`, in the first σ pass of the matches that
+    /// take `first_max_steps` (the first match from the guess, a loose answer's second match
+    /// and the slide check's), instead of `first_pass_convergence`: the restarts, the coarse
+    /// search's starts and the wide schedule keep theirs. Not in the thesis; `None` (the
+    /// default) leaves `first_pass_convergence` to every schedule, and [`Lorentz::with_lines`]
+    /// has [`FIRST_MATCH_CONVERGENCE`].
+    pub first_match_convergence: Option<Convergence>,
     /// For sparse scans, in the schedule the sparse finish follows (`sparse_finish`): when
     /// every σ pass stops, the last included, instead of `early_convergence` and
     /// `convergence`; the finish takes the answer on. Not in the thesis; `None` (the default)
@@ -282,6 +289,7 @@ impl Lorentz {
             first_pass_surfaces: Some(FIRST_PASS_SURFACE_POINTS),
             early_convergence: Some(EARLY_CONVERGENCE),
             first_pass_convergence: Some(FIRST_PASS_CONVERGENCE),
+            first_match_convergence: Some(FIRST_MATCH_CONVERGENCE),
             sparse_early_convergence: Some(SPARSE_EARLY_CONVERGENCE),
             sigmas_m: SPARSE_SIGMAS.to_vec(),
             crowd_ratio: Some(CROWD_RATIO),
@@ -333,6 +341,7 @@ impl Default for Lorentz {
             stop_on_cycles: false,
             first_pass_surfaces: None,
             first_pass_convergence: None,
+            first_match_convergence: None,
             sparse_early_convergence: None,
             sparse_finish: None,
             sparse_start: None,
@@ -504,7 +513,7 @@ impl Lorentz {
         // Every answer is judged by `passes`, by the rule `align` applies, so it carries its
         // quality and `align` does not judge it again.
         let mut first = self.passes(
-            (sigmas, first_steps, crowd),
+            (sigmas, first_steps, crowd, true),
             scans,
             lines.as_ref(),
             guess,
@@ -524,7 +533,7 @@ impl Lorentz {
         }
         if first_spread.is_some() && first.quality.inlier_share < self.wide_below {
             let again = self.passes(
-                (sigmas, first_steps, crowd),
+                (sigmas, first_steps, crowd, true),
                 scans,
                 lines.as_ref(),
                 guess,
@@ -551,7 +560,7 @@ impl Lorentz {
         let mut iterations = first.iterations;
         if !self.wide_sigmas_m.is_empty() && (!trusted || (loose && far)) {
             let wide = self.passes(
-                (&self.wide_sigmas_m, self.max_steps, None),
+                (&self.wide_sigmas_m, self.max_steps, None, false),
                 scans,
                 lines.as_ref(),
                 guess,
@@ -624,7 +633,7 @@ impl Lorentz {
         for offset in &self.restarts {
             let start = guess.compose(offset);
             let result = self.passes(
-                (sigmas, self.max_steps, crowd),
+                (sigmas, self.max_steps, crowd, false),
                 scans,
                 lines.as_ref(),
                 start,
@@ -676,7 +685,7 @@ impl Lorentz {
         let mut best: Option<MatchResult> = None;
         for start in correlative::best_starts(from, to, guess, window, (count, 3)) {
             let result = self.passes(
-                (sigmas, self.max_steps, crowd),
+                (sigmas, self.max_steps, crowd, false),
                 (reference, current),
                 lines,
                 start,
@@ -765,7 +774,7 @@ impl Lorentz {
         let steps = self.first_max_steps.unwrap_or(self.max_steps);
         let crowd = self.crowd_ratio.filter(|_| dense);
         let again = self.passes(
-            (self.schedule_for(dense), steps, crowd),
+            (self.schedule_for(dense), steps, crowd, true),
             (reference, current),
             lines.as_ref(),
             start,

@@ -99,13 +99,15 @@ fn normals_spread(normals: &[Normal], share: f64) -> bool {
 
 impl Lorentz {
     /// The σ passes of `sigmas`, at most `steps` NLM steps a search, leaving out crowded pairs
-    /// when `crowd` gives a ratio ([`Lorentz::crowd_ratio`]), and the polish from `guess`; the
+    /// when `crowd` gives a ratio ([`Lorentz::crowd_ratio`]), its first pass stopped as
+    /// [`Lorentz::first_match_convergence`] says when `first_match` (a match that takes
+    /// `first_max_steps`), and the polish from `guess`; the
     /// answer judged by the trust rule. `last` keeps each current point's last nearest
     /// reference point from one search to the next, and from one call to the next of a match
     /// (the same answers, searched less).
     pub(super) fn passes(
         &self,
-        (sigmas, steps, crowd): (&[f64], u32, Option<f64>),
+        (sigmas, steps, crowd, first_match): (&[f64], u32, Option<f64>, bool),
         (reference, current): (&Reference, &ScanPoints),
         lines: Option<&Assist>,
         guess: Pose2,
@@ -158,7 +160,10 @@ impl Lorentz {
                 self.early_convergence,
             ) {
                 // The crowd rule marks a dense scan's schedules but the wide one.
-                (Some(first), _, _) if pass == 0 && crowd.is_some() && more_passes => first,
+                (Some(first), _, _) if pass == 0 && crowd.is_some() && more_passes => self
+                    .first_match_convergence
+                    .filter(|_| first_match)
+                    .unwrap_or(first),
                 (_, Some(sparse), _) => sparse,
                 (_, _, Some(early)) if more_passes => early,
                 _ => self.convergence,

@@ -438,6 +438,39 @@ pub const FIRST_PASS_CONVERGENCE: Convergence = Convergence {
     max_iterations: 30,
 };
 
+/// When the first σ pass of a dense scan's first match from the guess stops in
+/// [`Lorentz::with_lines`] ([`Lorentz::first_match_convergence`]): a search that moves the
+/// estimate by under 0.9 mm and 0.009°, three times [`FIRST_PASS_CONVERGENCE`]; the restarts
+/// and the coarse search's starts keep that. Under a millimetre is a fiftieth of the pass's σ
+/// (5 cm), and the polish's first round alone moves a dense answer a median 1.6 mm (counted
+/// on seed 1's first 100 pairs a row).
+///
+/// Chosen on seeds 1–10 of `twin matchers --matchers lorentz-lines --seeds 10` (2026-12-02)
+/// from three, five and ten times [`FIRST_PASS_CONVERGENCE`] in every dense schedule but the
+/// wide one: at three times every row right on the same pairs, the twin's dense pairs without
+/// outliers in 6.6 searches a pair for 7.8, Belgioioso in 29.7 for 31.4, the median errors the
+/// same within 0.01 mm on the twin's pairs and 0.15 mm on the real logs; five times lost a
+/// Freiburg 101 pair, ten times two of Belgioioso's and one of Freiburg 101's. But in the
+/// L-corridor of 002's Appendix E (test `the_l_corridor_of_002_appendix_e`) a restart, started
+/// away from the guess where the first answer was rightly untrusted, then found a trusted place
+/// 35 cm up the corridor; so the restarts keep the old test. Held out so on seeds 21–50 and
+/// 61–90 (18,000 pairs a row): without outliers one pair lost (seed 43's pair 58, an answer
+/// 40 → 53 mm along a wall, fitting fewer points than the truth both times), with 20 % outliers
+/// +4 −2, every other row right on the same pairs; the same right answers as with the restarts
+/// stopped sooner too. On seeds 11–20, in the README's table, one pair lost without outliers
+/// (seed 20's 279, 35 → 57 mm along a wall, fitting more points than the truth), the other rows
+/// right as often. The Table 5.1 study (`twin montecarlo studies/table-5-1.toml`): with 20 %
+/// outliers the worst e_t 12.58 → 10.47 mm, the mean and sd of e_t 2.0480 → 2.0471 and 1.1839 →
+/// 1.1803 mm, at 2 % 1.7344 → 1.7326 and 1.0186 → 1.0170 mm, the heading errors the same in
+/// print; searches a trial 4.96 → 4.03 and 29.57 → 26.99. Raced in turn with the build before
+/// (`cargo bench --bench matcher_race`), the twin's dense pairs without outliers 0.96–0.98 →
+/// 0.94–0.95 of `pl-icp`'s time by the median pair.
+pub const FIRST_MATCH_CONVERGENCE: Convergence = Convergence {
+    translation_m: 9e-4,
+    rotation_rad: 9e-3 * std::f64::consts::PI / 180.0,
+    max_iterations: 30,
+};
+
 /// When the σ passes of a sparse scan's schedule ([`SPARSE_SIGMAS`]) stop in
 /// [`Lorentz::with_lines`] ([`Lorentz::sparse_early_convergence`]), the sparse finish
 /// following the last: a search that moves the estimate by under 0.3 mm and 0.003°, as a
