@@ -209,12 +209,12 @@ pub struct Lorentz {
     /// in the thesis; `None` (the default) stops it as the other passes before the last, and
     /// [`Lorentz::with_lines`] has [`FIRST_PASS_CONVERGENCE`].
     pub first_pass_convergence: Option<Convergence>,
-    /// For dense scans, as `first_pass_convergence`, in the first σ pass of the matches that
-    /// take `first_max_steps` (the first match from the guess, a loose answer's second match
-    /// and the slide check's), instead of `first_pass_convergence`: the restarts, the coarse
-    /// search's starts and the wide schedule keep theirs. Not in the thesis; `None` (the
-    /// default) leaves `first_pass_convergence` to every schedule, and [`Lorentz::with_lines`]
-    /// has [`FIRST_MATCH_CONVERGENCE`].
+    /// With `first_pass_convergence`: when the first σ pass of a dense scan stops in the
+    /// matches that take `first_max_steps` (the first match from the guess, a loose answer's
+    /// second match and the slide check's), instead of `first_pass_convergence`, which the
+    /// restarts and the coarse search's starts keep. Not in the thesis; `None` (the default)
+    /// leaves `first_pass_convergence` to every schedule, and [`Lorentz::with_lines`] has
+    /// [`FIRST_MATCH_CONVERGENCE`].
     pub first_match_convergence: Option<Convergence>,
     /// For sparse scans, in the schedule the sparse finish follows (`sparse_finish`): when
     /// every σ pass stops, the last included, instead of `early_convergence` and

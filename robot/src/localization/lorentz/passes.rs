@@ -99,12 +99,11 @@ fn normals_spread(normals: &[Normal], share: f64) -> bool {
 
 impl Lorentz {
     /// The σ passes of `sigmas`, at most `steps` NLM steps a search, leaving out crowded pairs
-    /// when `crowd` gives a ratio ([`Lorentz::crowd_ratio`]), its first pass stopped as
+    /// when `crowd` gives a ratio ([`Lorentz::crowd_ratio`]), the first pass stopped as
     /// [`Lorentz::first_match_convergence`] says when `first_match` (a match that takes
-    /// `first_max_steps`), and the polish from `guess`; the
-    /// answer judged by the trust rule. `last` keeps each current point's last nearest
-    /// reference point from one search to the next, and from one call to the next of a match
-    /// (the same answers, searched less).
+    /// `first_max_steps`), and the polish from `guess`; the answer judged by the trust rule.
+    /// `last` keeps each current point's last nearest reference point from one search to the
+    /// next, and from one call to the next of a match (the same answers, searched less).
     pub(super) fn passes(
         &self,
         (sigmas, steps, crowd, first_match): (&[f64], u32, Option<f64>, bool),
