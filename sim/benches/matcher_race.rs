@@ -74,7 +74,10 @@ fn main() {
             }
             let file =
                 Path::new(&dir).join(format!("{}.csv", set.name.replace([' ', ',', '/'], "_")));
-            std::fs::write(&file, csv).expect("RACE_CSV names a writable folder");
+            if let Err(error) = std::fs::write(&file, csv) {
+                eprintln!("RACE_CSV={dir:?}: cannot write {}: {error}", file.display());
+                std::process::exit(2);
+            }
         }
         println!(
             "| {} | {:.0} µs | {:.0} µs | {:.3} | {:.3} | {:.2} |",
