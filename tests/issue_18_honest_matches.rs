@@ -1675,6 +1675,9 @@ fn a_dense_first_pass_stops_sooner() {
     }
 }
 
+/// Two matchers' right answers, searches in all and translation errors (metres), one row's.
+type RowTotals = ([usize; 2], [u32; 2], [Vec<f64>; 2]);
+
 /// Per row but the 1° ones, two matchers' right answers, searches in all and translation
 /// errors (metres) side by side over `seeds` ([`each_pair_side_by_side`]), with what every
 /// cheaper dense schedule must show asserted: every row right as often (a pair either way
@@ -1682,8 +1685,8 @@ fn a_dense_first_pass_stops_sooner() {
 fn dense_rows_side_by_side(
     matchers: [&robot::localization::Lorentz; 2],
     seeds: &[u64],
-) -> BTreeMap<String, ([usize; 2], [u32; 2], [Vec<f64>; 2])> {
-    let mut rows: BTreeMap<String, ([usize; 2], [u32; 2], [Vec<f64>; 2])> = BTreeMap::new();
+) -> BTreeMap<String, RowTotals> {
+    let mut rows: BTreeMap<String, RowTotals> = BTreeMap::new();
     each_pair_side_by_side(matchers, seeds, |set, c, [a, b]| {
         let (right, searches, errors) = rows.entry(set.name.clone()).or_default();
         for (k, r) in [a, b].into_iter().enumerate() {
