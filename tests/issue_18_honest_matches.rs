@@ -252,6 +252,46 @@ fn the_corrected_logs_fit_their_poses_best_at_carmens_beam_step() {
     }
 }
 
+/// A corrected log's poses are its laser's, not its base's: Freiburg 101 declares
+/// `PARAM robot_frontlaser_offset -0.04` (the laser 4 cm behind the base's centre), yet its
+/// consecutive scans, like Belgioioso's and Edmonton's (offset 0), fit each other best placed
+/// by the poses as they stand, worse with the laser moved 4 cm either way along the heading. So
+/// the pairs' truth is the poses' own relation, with no offset applied.
+#[test]
+fn the_corrected_logs_poses_are_their_lasers() {
+    let dir = repo().join("tests/data/corrected");
+    for log in ["belgioioso", "freiburg-101", "edmonton"] {
+        let scans = robot::logs::read_log(&dir.join(format!("{log}-corrected.log.gz")))
+            .unwrap()
+            .scans_with_logged_pose();
+        let references: Vec<Reference> = scans
+            .iter()
+            .map(|(scan, _)| Reference::new(scan.points()))
+            .collect();
+        // The mean share of each pair's current points on the reference's surfaces, each scan
+        // taken `forward_m` ahead of its logged pose.
+        let fit = |forward_m: f64| {
+            let laser = Pose2::new(forward_m, 0.0, 0.0);
+            let shares: Vec<f64> = scans
+                .windows(2)
+                .zip(&references)
+                .map(|(w, reference)| {
+                    let truth = w[0].1.compose(&laser).relative(&w[1].1.compose(&laser));
+                    TrustRule::default()
+                        .assess(reference, &w[1].0.points().xy, &truth)
+                        .inlier_share
+                })
+                .collect();
+            shares.iter().sum::<f64>() / shares.len() as f64
+        };
+        let (behind, as_logged, ahead) = (fit(-0.04), fit(0.0), fit(0.04));
+        assert!(
+            as_logged > behind && as_logged > ahead,
+            "{log}: {as_logged:.4} as logged, {behind:.4} 4 cm behind, {ahead:.4} 4 cm ahead"
+        );
+    }
+}
+
 /// The quality is the same rule whichever matcher answered: judging a pose directly gives what
 /// the match reported.
 #[test]

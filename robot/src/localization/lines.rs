@@ -246,9 +246,59 @@ pub fn lines_of(points: &[[f64; 2]], params: &LineParams) -> Vec<Option<Line>> {
         .collect()
 }
 
+/// The lines of a reference scan's points ([`grow_line`]), each grown the first time it is
+/// asked for and kept: the same lines as [`lines_of`], without growing those of the points no
+/// current point comes nearest to.
+#[derive(Debug)]
+pub struct LazyLines<'a> {
+    points: &'a [[f64; 2]],
+    params: LineParams,
+    grown: Vec<std::cell::OnceCell<Option<Line>>>,
+}
+
+impl<'a> LazyLines<'a> {
+    /// No line grown yet, for the scan's `points` in beam order.
+    pub fn new(points: &'a [[f64; 2]], params: LineParams) -> Self {
+        LazyLines {
+            points,
+            params,
+            grown: (0..points.len())
+                .map(|_| std::cell::OnceCell::new())
+                .collect(),
+        }
+    }
+
+    /// The line around point `k` (`None` where no good line grows, or past the scan's end).
+    pub fn get(&self, k: usize) -> Option<&Line> {
+        let cell = self.grown.get(k)?;
+        cell.get_or_init(|| grow_line(self.points, k, &self.params))
+            .as_ref()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Asked in any order, and again, the lazy lines are the lines grown all at once.
+    #[test]
+    fn lazy_lines_are_the_lines_grown_at_once() {
+        // A wall, a corner onto another, and a few scattered points.
+        let mut points: Vec<[f64; 2]> = (0..20).map(|i| [i as f64 * 0.1, 2.0]).collect();
+        points.extend((1..15).map(|i| [1.9, 2.0 - i as f64 * 0.1]));
+        points.extend([[0.3, 0.4], [-1.0, 0.7], [2.5, -0.2]]);
+        let params = LineParams::default();
+        let all = lines_of(&points, &params);
+        assert!(all.iter().filter(|l| l.is_some()).count() > 20);
+        let lazy = LazyLines::new(&points, params);
+        for k in (0..points.len()).rev().chain(0..points.len() + 2) {
+            assert_eq!(
+                lazy.get(k),
+                all.get(k).and_then(Option::as_ref),
+                "point {k}"
+            );
+        }
+    }
 
     #[test]
     fn a_wall_gives_a_good_line_and_an_exact_projection() {

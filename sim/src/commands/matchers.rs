@@ -164,7 +164,9 @@ pub fn log_set(
     error: GuessError,
     seed: u64,
 ) -> Result<CaseSet, CommandError> {
-    // Each scan with the pose its own FLASER line states: a corrected log's corrected pose.
+    // Each scan with the pose its own FLASER line states: a corrected log's corrected pose,
+    // which is the laser's (Freiburg 101's declared 4 cm offset is not applied: its scans fit
+    // each other best without it, `the_corrected_logs_poses_are_their_lasers`).
     let scans = robot::logs::read_log(log)?.scans_with_logged_pose();
     let case = |(from, to): (&(RangeScan, Pose2), &(RangeScan, Pose2)), rng: &mut SimRng| {
         let truth = from.1.relative(&to.1);

@@ -25,7 +25,7 @@ pub use settings::{
 
 use super::correlative;
 use super::kdtree::LastNearest;
-use super::lines::{Line, LineParams, lines_of};
+use super::lines::{LazyLines, LineParams};
 use super::matcher::{Convergence, MatchResult, Reference, ScanMatcher};
 use super::plicp::PointToLine;
 use super::quality::{TrustRule, slide_vote};
@@ -371,21 +371,21 @@ impl ScanMatcher for Lorentz {
         let mut last = vec![None; current.len()];
         let dense = self.is_dense(current);
         let scans = (reference, current);
+        // The reference's lines, each grown when a search first asks for it, for every match
+        // from here.
+        let lazy = self
+            .lines
+            .map(|params| LazyLines::new(&reference.points.xy, params));
+        let grown = lazy.as_ref();
         // A sparse pair that point-to-line ICP alone settles ends here; else its first round
         // is the start's.
         let mut first_round = None;
         if let Some(quick) = self.sparse_quick.filter(|_| !dense) {
             match self.quick(&quick, scans, guess, &mut last) {
-                Ok(matched) => return self.checked(scans, None, dense, matched, &mut last),
+                Ok(matched) => return self.checked(scans, grown, dense, matched, &mut last),
                 Err(left) => first_round = Some(left),
             }
         }
-        // The reference's lines, grown once for every match from here.
-        let grown = self
-            .lines
-            .as_ref()
-            .map(|params| lines_of(&reference.points.xy, params));
-        let grown = grown.as_deref();
         let (start, rounds) = self.start(scans, dense, guess, first_round, &mut last);
         let mut matched = self.match_from(scans, grown, dense, start, &mut last);
         matched.iterations += rounds;
@@ -475,7 +475,7 @@ impl Lorentz {
     fn checked(
         &self,
         scans: (&Reference, &ScanPoints),
-        grown: Option<&[Option<Line>]>,
+        grown: Option<&LazyLines>,
         dense: bool,
         matched: MatchResult,
         last: &mut [Option<LastNearest>],
@@ -494,11 +494,11 @@ impl Lorentz {
     /// The match from `guess`: the σ passes, and when their answer is loose or untrusted the
     /// wide schedule, the restarts and the coarse search's starts; `dense` as
     /// [`Lorentz::is_dense`] says of `current`, `last` as in [`Lorentz::passes`], `grown` the
-    /// reference's lines ([`lines_of`]) when the matcher has `lines`.
+    /// reference's lines ([`LazyLines`]) when the matcher has `lines`.
     fn match_from(
         &self,
         (reference, current): (&Reference, &ScanPoints),
-        grown: Option<&[Option<Line>]>,
+        grown: Option<&LazyLines>,
         dense: bool,
         guess: Pose2,
         last: &mut [Option<LastNearest>],
@@ -707,7 +707,7 @@ impl Lorentz {
     /// the normals spread by `spread`; `None` without `lines`.
     fn assist<'a>(
         &self,
-        grown: Option<&'a [Option<Line>]>,
+        grown: Option<&'a LazyLines<'a>>,
         spread: Option<f64>,
     ) -> Option<Assist<'a>> {
         let (params, lines) = self.lines.as_ref().zip(grown)?;
@@ -729,7 +729,7 @@ impl Lorentz {
         &self,
         check: &SlideCheck,
         (reference, current): (&Reference, &ScanPoints),
-        grown: Option<&[Option<Line>]>,
+        grown: Option<&LazyLines>,
         dense: bool,
         matched: MatchResult,
         last: &mut [Option<LastNearest>],
@@ -762,15 +762,7 @@ impl Lorentz {
             return matched;
         }
         let spread = self.spread_for(dense);
-        // Lines not grown yet (a quick finish's answer) are grown now, for the match again.
-        let grown_here = match grown {
-            Some(_) => None,
-            None => self
-                .lines
-                .as_ref()
-                .map(|params| lines_of(&reference.points.xy, params)),
-        };
-        let lines = self.assist(grown.or(grown_here.as_deref()), spread);
+        let lines = self.assist(grown, spread);
         let steps = self.first_max_steps.unwrap_or(self.max_steps);
         let crowd = self.crowd_ratio.filter(|_| dense);
         let again = self.passes(

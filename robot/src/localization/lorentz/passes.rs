@@ -5,7 +5,7 @@ use super::Lorentz;
 use super::energy::Normal;
 use crate::geometry::{Pose2, wrap_angle};
 use crate::localization::kdtree::LastNearest;
-use crate::localization::lines::Line;
+use crate::localization::lines::LazyLines;
 use crate::localization::matcher::{MatchResult, Reference, transform_all};
 use crate::localization::quality::{TrustRule, polish_near};
 use crate::localization::scan::ScanPoints;
@@ -71,13 +71,13 @@ impl Crowding {
     }
 }
 
-/// Line-assisted association: the reference's local lines ([`lines_of`]), the margin past a
+/// Line-assisted association: the reference's local lines ([`LazyLines`]), the margin past a
 /// segment's ends a projection may reach, and when the pairs projected inside a line count
 /// their distance to it alone ([`Lorentz::line_residuals_spread`], for dense scans).
 ///
-/// [`lines_of`]: crate::localization::lines::lines_of
+/// [`LazyLines`]: crate::localization::lines::LazyLines
 pub(super) struct Assist<'a> {
-    pub(super) lines: &'a [Option<Line>],
+    pub(super) lines: &'a LazyLines<'a>,
     pub(super) margin: f64,
     pub(super) spread: Option<f64>,
 }
@@ -185,7 +185,7 @@ impl Lorentz {
                     let mut target = reference.points.xy[j];
                     let mut normal = None;
                     if let Some(assist) = lines
-                        && let Some(line) = &assist.lines[j]
+                        && let Some(line) = assist.lines.get(j)
                     {
                         let (on_line, inside) = line.projection(*p, assist.margin);
                         let (dx, dy) = (on_line[0] - p[0], on_line[1] - p[1]);
