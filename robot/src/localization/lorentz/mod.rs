@@ -17,10 +17,11 @@ mod settings;
 
 pub use settings::{
     COARSE, CROWD_RATIO, DENSE_SIGMAS, EARLY_CONVERGENCE, FAR_SLIDE_M, FIRST_MATCH_CONVERGENCE,
-    FIRST_PASS_CONVERGENCE, FIRST_PASS_ENOUGH, FIRST_PASS_SURFACE_POINTS, FIRST_SPREAD,
-    FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD, POLISH_MORE, QuickFinish, RESTARTS,
-    SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH, SPARSE_LINE_RESIDUALS_SPREAD,
-    SPARSE_QUICK, SPARSE_SIGMAS, SPARSE_START, SlideCheck, StartRounds, THESIS_SIGMAS, WIDE_SIGMAS,
+    FIRST_PASS_CONVERGENCE, FIRST_PASS_ENOUGH, FIRST_PASS_SURFACE_POINTS, FIRST_PASS_THINNING,
+    FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD, POLISH_MORE,
+    QuickFinish, RESTARTS, SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH,
+    SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_QUICK, SPARSE_SIGMAS, SPARSE_START, SlideCheck,
+    StartRounds, THESIS_SIGMAS, WIDE_SIGMAS,
 };
 
 use super::correlative;
@@ -216,6 +217,14 @@ pub struct Lorentz {
     /// leaves `first_pass_convergence` to every schedule, and [`Lorentz::with_lines`] has
     /// [`FIRST_MATCH_CONVERGENCE`].
     pub first_match_convergence: Option<Convergence>,
+    /// For dense scans (as `dense_sigmas_m`), in the first σ pass of every schedule but the
+    /// wide one: its first searches pair every second current point only, until a search moves
+    /// the estimate by less than this (or after its `max_iterations` such searches); the
+    /// searches after it take every point, and only they can end the pass. Those first
+    /// searches are the ones whose queries miss the k-d tree's cache, the estimate still some
+    /// centimetres off. Not in the thesis; `None` (the default) searches every point, and
+    /// [`Lorentz::with_lines`] has [`FIRST_PASS_THINNING`].
+    pub first_pass_thinning: Option<Convergence>,
     /// For sparse scans, in the schedule the sparse finish follows (`sparse_finish`): when
     /// every σ pass stops, the last included, instead of `early_convergence` and
     /// `convergence`; the finish takes the answer on. Not in the thesis; `None` (the default)
@@ -290,6 +299,7 @@ impl Lorentz {
             early_convergence: Some(EARLY_CONVERGENCE),
             first_pass_convergence: Some(FIRST_PASS_CONVERGENCE),
             first_match_convergence: Some(FIRST_MATCH_CONVERGENCE),
+            first_pass_thinning: Some(FIRST_PASS_THINNING),
             sparse_early_convergence: Some(SPARSE_EARLY_CONVERGENCE),
             sigmas_m: SPARSE_SIGMAS.to_vec(),
             crowd_ratio: Some(CROWD_RATIO),
@@ -342,6 +352,7 @@ impl Default for Lorentz {
             first_pass_surfaces: None,
             first_pass_convergence: None,
             first_match_convergence: None,
+            first_pass_thinning: None,
             sparse_early_convergence: None,
             sparse_finish: None,
             sparse_start: None,

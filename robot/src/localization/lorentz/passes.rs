@@ -101,7 +101,9 @@ impl Lorentz {
     /// The σ passes of `sigmas`, at most `steps` NLM steps a search, leaving out crowded pairs
     /// when `crowd` gives a ratio ([`Lorentz::crowd_ratio`]), the first pass stopped as
     /// [`Lorentz::first_match_convergence`] says when `first_match` (a match that takes
-    /// `first_max_steps`), and the polish from `guess`; the answer judged by the trust rule.
+    /// `first_max_steps`), its first searches on every second current point as
+    /// [`Lorentz::first_pass_thinning`] says (with `crowd`), and the polish from `guess`; the
+    /// answer judged by the trust rule.
     /// `last` keeps each current point's last nearest reference point from one search to the
     /// next, and from one call to the next of a match (the same answers, searched less).
     pub(super) fn passes(
@@ -131,6 +133,8 @@ impl Lorentz {
             .filter(|_| crowd.is_some())
             .map(|(distance, share)| (distance * distance, share));
         let mut close = 0;
+        // How many current points the last search paired or left out (all but while thinned).
+        let mut searched = current.len();
         // With `first_pass_surfaces` on a dense scan: the fewest points a surface that holds a
         // pair must have been fitted to.
         let surfaces = self.first_pass_surfaces.filter(|_| crowd.is_some());
@@ -140,7 +144,7 @@ impl Lorentz {
         for (pass, &sigma) in sigmas.iter().enumerate() {
             if pass == 1
                 && let Some((_, share)) = enough
-                && close as f64 >= share * current.len() as f64
+                && close as f64 >= share * searched as f64
             {
                 break;
             }
@@ -169,6 +173,12 @@ impl Lorentz {
             };
             // The estimate before the search before the last, for `stop_on_cycles`.
             let mut two_back: Option<[f64; 3]> = None;
+            // While set, each search takes every second current point (`first_pass_thinning`);
+            // the searches thinned so far.
+            let mut thinning = self
+                .first_pass_thinning
+                .filter(|_| pass == 0 && crowd.is_some() && more_passes);
+            let mut thinned = 0;
             for _ in 0..self.convergence.max_iterations {
                 result.iterations += 1;
                 let pose = Pose2::new(phi[1], phi[2], phi[0]);
@@ -177,7 +187,9 @@ impl Lorentz {
                 targets.clear();
                 normals.clear();
                 close = 0;
-                for (i, p) in moved.iter().enumerate() {
+                let every = if thinning.is_some() { 2 } else { 1 };
+                searched = current.len().div_ceil(every);
+                for (i, p) in moved.iter().enumerate().step_by(every) {
                     let (j, d2) = reference
                         .tree
                         .nearest_cached(*p, &mut last[i])
@@ -239,6 +251,16 @@ impl Lorentz {
                     phi[2] - before[2],
                     wrap_angle(phi[0] - before[0]),
                 );
+                // A thinned search never ends the pass: the first search of all the points
+                // after it may still move the estimate.
+                if let Some(thin) = thinning {
+                    thinned += 1;
+                    if thinned >= thin.max_iterations || thin.reached(&step) {
+                        thinning = None;
+                    }
+                    two_back = None;
+                    continue;
+                }
                 if stop.reached(&step) {
                     result.settled = true;
                     break;

@@ -471,6 +471,40 @@ pub const FIRST_MATCH_CONVERGENCE: Convergence = Convergence {
     max_iterations: 30,
 };
 
+/// How long the first σ pass of a dense scan searches every second current point only in
+/// [`Lorentz::with_lines`] ([`Lorentz::first_pass_thinning`]): two searches at most, fewer when
+/// one moves the estimate by under 1 mm and 0.001 rad (0.06°).
+///
+/// The first searches of a match are the dear ones: the estimate is still centimetres off, so
+/// nearly every current point leaves the k-d tree's cache and is searched for again (on the
+/// twin's dense pairs without outliers, 0.54 M of `lorentz-lines`' 1.42 M queries over 300
+/// pairs were tree searches, 44 % of its samples). Half the points place the estimate as well
+/// while it moves by centimetres; the search of every point that follows, and the passes and
+/// polish after it, place it to the millimetre. Thinned throughout the pass (until a search
+/// moves under 1 mm, no cap) gave 0.857–0.864 of `pl-icp`'s time on that row, three searches at
+/// most 0.852–0.856, two 0.866–0.869, one 0.928; the build before 0.981–0.998 in the same hour.
+///
+/// Chosen on seeds 1–30 of `twin matchers --matchers lorentz-lines --seeds 10` (2026-12-02)
+/// between one, two, three and no cap, and held out on 41–50, 61–70 and 71–80; over all sixty
+/// seeds (18,000 pairs a row, Freiburg 101 17,460) against the build before: the twin's dense
+/// pairs 17,993 → 17,994 right without outliers (+2 −1) and 17,969 → 17,967 with 20 % (+2 −4),
+/// Belgioioso 17,992 (+3 −3), Freiburg 101 17,095 → 17,096, the large guesses 17,785 → 17,782
+/// (+12 −15), the sparse rows (the twin's 1° scans, Edmonton) the same answers to the bit. The
+/// pairs that moved are knife edges: headings 0.6 ↔ 1.3° off before a recess, and answers 3–8
+/// cm along a wall, fitting as many points as the truth or more either way. Pooled over the
+/// sixty seeds the median errors are the same to 0.01 mm (the large guesses' 27.80 → 27.85
+/// mm), the 95th percentiles within 0.5 mm (Belgioioso 59.1 → 58.7). The Table 5.1 study (`twin montecarlo studies/table-5-1.toml`): at 2 %
+/// the worst e_t 13.29 → 13.06 mm, at 20 % 10.47 → 11.96 mm (trial 17919, the worst before
+/// too) and the worst e_θ 0.312 → 0.310°, the means and sds within 0.001 mm and 0.0001°.
+/// Raced in turn with the build before (`cargo bench --bench matcher_race`, three races each,
+/// 17:51–17:53 UTC): the twin's dense pairs without outliers 0.978–0.985 → 0.881–0.888 of
+/// `pl-icp`'s time by the median pair, Belgioioso 0.954–0.985 → 0.854–0.876.
+pub const FIRST_PASS_THINNING: Convergence = Convergence {
+    translation_m: 1e-3,
+    rotation_rad: 1e-3,
+    max_iterations: 2,
+};
+
 /// When the σ passes of a sparse scan's schedule ([`SPARSE_SIGMAS`]) stop in
 /// [`Lorentz::with_lines`] ([`Lorentz::sparse_early_convergence`]), the sparse finish
 /// following the last: a search that moves the estimate by under 0.3 mm and 0.003°, as a
