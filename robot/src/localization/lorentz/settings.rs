@@ -493,9 +493,10 @@ pub const FIRST_MATCH_CONVERGENCE: Convergence = Convergence {
 /// pairs that moved are knife edges: headings 0.6 ↔ 1.3° off before a recess, and answers 3–8
 /// cm along a wall, fitting as many points as the truth or more either way. Pooled over the
 /// sixty seeds the median errors are the same to 0.01 mm (the large guesses' 27.80 → 27.85
-/// mm), the 95th percentiles within 0.5 mm (Belgioioso 59.1 → 58.7). The Table 5.1 study (`twin montecarlo studies/table-5-1.toml`): at 2 %
-/// the worst e_t 13.29 → 13.06 mm, at 20 % 10.47 → 11.96 mm (trial 17919, the worst before
-/// too) and the worst e_θ 0.312 → 0.310°, the means and sds within 0.001 mm and 0.0001°.
+/// mm), the 95th percentiles within 0.5 mm (Belgioioso 59.1 → 58.7). The Table 5.1 study
+/// (`twin montecarlo studies/table-5-1.toml`): at 2 % the worst e_t 13.29 → 13.06 mm, at 20 %
+/// 10.47 → 11.96 mm (trial 17919, the worst before too) and the worst e_θ 0.312 → 0.310°, the
+/// means and sds within 0.001 mm and 0.0001°.
 /// Raced in turn with the build before (`cargo bench --bench matcher_race`, three races each,
 /// 17:51–17:53 UTC): the twin's dense pairs without outliers 0.978–0.985 → 0.881–0.888 of
 /// `pl-icp`'s time by the median pair, Belgioioso 0.954–0.985 → 0.854–0.876.
