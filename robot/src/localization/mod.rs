@@ -40,7 +40,7 @@ pub use lorentz::{
     FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD, Lorentz, POLISH_MORE,
     QuickFinish, SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH,
     SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_QUICK, SPARSE_SIGMAS, SPARSE_START, SlideCheck,
-    StartRounds, THESIS_SIGMAS, WIDE_SIGMAS,
+    StartRounds, THESIS_SIGMAS, Thinning, WIDE_SIGMAS,
 };
 pub use map::{MapBuilder, MapConfig, MatchStats, Placed};
 pub use matcher::{

@@ -21,7 +21,7 @@ pub use settings::{
     FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD, POLISH_MORE,
     QuickFinish, RESTARTS, SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH,
     SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_QUICK, SPARSE_SIGMAS, SPARSE_START, SlideCheck,
-    StartRounds, THESIS_SIGMAS, WIDE_SIGMAS,
+    StartRounds, THESIS_SIGMAS, Thinning, WIDE_SIGMAS,
 };
 
 use super::correlative;
@@ -218,13 +218,14 @@ pub struct Lorentz {
     /// [`FIRST_MATCH_CONVERGENCE`].
     pub first_match_convergence: Option<Convergence>,
     /// For dense scans (as `dense_sigmas_m`), in the first σ pass of every schedule but the
-    /// wide one: its first searches pair every second current point only, until a search moves
-    /// the estimate by less than this (or after its `max_iterations` such searches); the
-    /// searches after it take every point, and only they can end the pass. Those first
-    /// searches are the ones whose queries miss the k-d tree's cache, the estimate still some
-    /// centimetres off. Not in the thesis; `None` (the default) searches every point, and
-    /// [`Lorentz::with_lines`] has [`FIRST_PASS_THINNING`].
-    pub first_pass_thinning: Option<Convergence>,
+    /// wide one, when the current scan looks clean ([`Thinning`]: few points far from both
+    /// neighbours, as outliers are): its first searches pair every second current point only,
+    /// until a search moves the estimate by less than `searches`' step (or after its
+    /// `max_iterations` such searches); the searches after it take every point, and only they
+    /// can end the pass. Those first searches are the ones whose queries miss the k-d tree's
+    /// cache, the estimate still some centimetres off. Not in the thesis; `None` (the default)
+    /// searches every point, and [`Lorentz::with_lines`] has [`FIRST_PASS_THINNING`].
+    pub first_pass_thinning: Option<Thinning>,
     /// For sparse scans, in the schedule the sparse finish follows (`sparse_finish`): when
     /// every σ pass stops, the last included, instead of `early_convergence` and
     /// `convergence`; the finish takes the answer on. Not in the thesis; `None` (the default)

@@ -1,8 +1,8 @@
 //! A match's σ passes — search, pair, one NLM step, until a search no longer moves the estimate
 //! — and the point-to-line polish and the judgement that end them.
 
-use super::Lorentz;
 use super::energy::Normal;
+use super::{Lorentz, Thinning};
 use crate::geometry::{Pose2, wrap_angle};
 use crate::localization::kdtree::LastNearest;
 use crate::localization::lines::LazyLines;
@@ -80,6 +80,19 @@ pub(super) struct Assist<'a> {
     pub(super) lines: &'a LazyLines<'a>,
     pub(super) margin: f64,
     pub(super) spread: Option<f64>,
+}
+
+/// Whether at most `thinning.most_lonely` of the points `xy` (in beam order) lie farther than
+/// `thinning.lonely_m` from both their neighbours: a scan clean enough to be thinned. The first
+/// and last points, with one neighbour each, are never lonely.
+fn looks_clean(xy: &[[f64; 2]], thinning: &Thinning) -> bool {
+    let far2 = thinning.lonely_m * thinning.lonely_m;
+    let far = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) > far2;
+    let lonely = xy
+        .windows(3)
+        .filter(|w| far(w[1], w[0]) && far(w[1], w[2]))
+        .count();
+    lonely as f64 <= thinning.most_lonely * xy.len() as f64
 }
 
 /// Whether unit normals `normals` spread enough for point-to-line residuals: the smaller
@@ -177,7 +190,9 @@ impl Lorentz {
             // the searches thinned so far.
             let mut thinning = self
                 .first_pass_thinning
-                .filter(|_| pass == 0 && crowd.is_some() && more_passes);
+                .filter(|_| pass == 0 && crowd.is_some() && more_passes)
+                .filter(|thinning| looks_clean(&current.xy, thinning))
+                .map(|thinning| thinning.searches);
             let mut thinned = 0;
             for _ in 0..self.convergence.max_iterations {
                 result.iterations += 1;
@@ -374,6 +389,41 @@ mod tests {
         assert_eq!(kept, vec![0, 1, 2, 4, 5]);
         assert!(crowding.pairs.is_empty());
         assert!(crowding.nearest.iter().all(|d| d.is_infinite()));
+    }
+
+    /// A wall 3 m ahead, 361 beams: clean; with every fifth reading 10 m farther (20 % uniform
+    /// outliers, most of which land far beyond the walls), not; with one beam in twelve on a
+    /// chair leg 1.5 m nearer, still clean (8 % lonely, under 10 %); with one in nine (11 %),
+    /// not. The end points are never lonely.
+    #[test]
+    fn only_scans_with_few_lonely_points_look_clean() {
+        use crate::localization::FIRST_PASS_THINNING as THIN;
+        let wall = |k: usize, far: &dyn Fn(usize) -> f64| {
+            let a = (k as f64 * 0.5 - 90.0).to_radians();
+            let r = 3.0 / a.cos().max(0.3) + far(k);
+            [r * a.cos(), r * a.sin()]
+        };
+        let scan = |far: &dyn Fn(usize) -> f64| (0..361).map(|k| wall(k, far)).collect::<Vec<_>>();
+        assert!(looks_clean(&scan(&|_| 0.0), &THIN));
+        let outliers = scan(&|k| if k % 5 == 2 { 10.0 } else { 0.0 });
+        assert!(!looks_clean(&outliers, &THIN));
+        assert!(looks_clean(
+            &scan(&|k| if k % 12 == 6 { -1.5 } else { 0.0 }),
+            &THIN
+        ));
+        assert!(!looks_clean(
+            &scan(&|k| if k % 9 == 4 { -1.5 } else { 0.0 }),
+            &THIN
+        ));
+        // Every point far from the next: only the 359 inner ones can be lonely.
+        let spread: Vec<[f64; 2]> = (0..361).map(|k| [2.0 * k as f64, 0.0]).collect();
+        let share = |most_lonely| Thinning {
+            most_lonely,
+            ..THIN
+        };
+        assert!(looks_clean(&spread, &share(359.0 / 361.0)));
+        assert!(!looks_clean(&spread, &share(358.0 / 361.0)));
+        assert!(looks_clean(&[], &THIN));
     }
 
     /// Normals all one way (a corridor) or none do not spread; a corner's do, as far as the
