@@ -1141,7 +1141,8 @@ fn two_matchers_agree_against_a_corrected_pose_where_it_is_off() {
 
 /// `twin matchers --show SET/PAIR` draws the pair: the reference scan, the current scan at the
 /// true pose and at each matcher's answer, all inside the picture and in its legend, with a
-/// detail view where the scans share only a corner of it; a bad request is refused by name.
+/// detail view where the scans share only a corner of it, and writes the pair beside it as
+/// `twin match` reads it; a bad request is refused by name.
 #[test]
 fn twin_matchers_shows_a_pair() {
     let out = tempfile_dir("twin-matchers-show");
@@ -1182,6 +1183,22 @@ fn twin_matchers_shows_a_pair() {
     ] {
         assert!(svg.contains(label), "{label} missing");
     }
+    // Beside the picture, the pair as `twin match` reads it: matched again, the same answer's
+    // share as the legend's.
+    let pair = std::fs::read(out.join("pair-real-freiburg-101-248.jsonl")).unwrap();
+    let mut matcher = Command::new(env!("CARGO_BIN_EXE_twin"))
+        .args(["match", "--matcher", "lorentz-lines"])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::io::Write::write_all(&mut matcher.stdin.take().unwrap(), &pair).unwrap();
+    let reply = matcher.wait_with_output().unwrap();
+    let reply: serde_json::Value = serde_json::from_slice(&reply.stdout).unwrap();
+    assert_eq!(reply["converged"], true, "{reply}");
+    let share = reply["quality"]["inlier_share"].as_f64().unwrap();
+    let legend = format!("answer of lorentz-lines: {:.0} %", 100.0 * share);
+    assert!(svg.contains(&legend), "{legend} not in the legend");
     // Freiburg's scans share surfaces across the whole view: one view, no detail.
     assert!(
         !svg.contains("detail-area"),

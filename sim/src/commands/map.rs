@@ -421,13 +421,14 @@ struct RunScan {
     laser_tilt: f64,
 }
 
-/// One output line of `twin pairs` (the input of `twin match`).
+/// One output line of `twin pairs` (the input of `twin match`; `twin matchers --show` writes
+/// one too).
 #[derive(Serialize)]
-struct PairLine<'a> {
+pub(crate) struct PairLine<'a> {
     #[serde(rename = "ref")]
-    reference: &'a RangeScan,
-    cur: &'a RangeScan,
-    guess: [f64; 3],
+    pub reference: &'a RangeScan,
+    pub cur: &'a RangeScan,
+    pub guess: [f64; 3],
 }
 
 /// `twin pairs`: scan pairs as `twin match` reads them — each level scan with the next, the guess

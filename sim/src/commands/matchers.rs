@@ -25,6 +25,7 @@
 //! Everything but the times is the same on every run and machine for a given seed.
 
 use super::CommandError;
+use super::map::PairLine;
 use crate::commands::montecarlo::pairs::PairMaker;
 use crate::config::{Outliers, RobotDescription, WorldDescription};
 use crate::output::pair::{Placement, write_pair_svg};
@@ -918,7 +919,8 @@ pub struct MatchersArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Draw one pair into `--out` as `pair-SET-PAIR.svg`: the reference scan, and the current
-    /// scan at the true pose and at each matcher's answer. `SET/PAIR`, where SET is part of a
+    /// scan at the true pose and at each matcher's answer, and the pair as `twin match` reads it
+    /// (`pair-SET-PAIR.jsonl`). `SET/PAIR`, where SET is part of a
     /// row's name (`freiburg-101/248`, `20 %/7`).
     #[arg(long, value_name = "SET/PAIR")]
     pub show: Option<String>,
@@ -927,13 +929,14 @@ pub struct MatchersArgs {
     pub quiet: bool,
 }
 
-/// Draws pair `pair` of the set whose name contains `name` (`--show NAME/PAIR`) into `dir`.
+/// Draws pair `pair` of the set whose name contains `name` (`--show NAME/PAIR`) into `dir`, and
+/// writes it beside the picture as `twin match` reads it: the two files written.
 fn show(
     sets: &[CaseSet],
     kinds: &[MatcherKind],
     spec: &str,
     dir: &Path,
-) -> Result<PathBuf, CommandError> {
+) -> Result<[PathBuf; 2], CommandError> {
     let bad = |why: &'static str| CommandError::option("--show", why, spec);
     let (name, pair) = spec
         .rsplit_once('/')
@@ -975,7 +978,8 @@ fn show(
         .filter(|part| !part.is_empty())
         .collect::<Vec<_>>()
         .join("-");
-    let path = dir.join(format!("pair-{slug}-{pair}.svg"));
+    let stem = dir.join(format!("pair-{slug}-{pair}"));
+    let path = stem.with_extension("svg");
     let title = format!(
         "{}, pair {pair}: current scan placed in the reference laser frame",
         set.name
@@ -991,7 +995,22 @@ fn show(
         dir: dir.to_path_buf(),
         source,
     })?;
-    Ok(path)
+    // The pair as `twin match` reads it, to run it again through any matcher.
+    let line = PairLine {
+        reference: &case.reference,
+        cur: &case.current,
+        guess: [case.guess.x, case.guess.y, case.guess.theta],
+    };
+    let jsonl = stem.with_extension("jsonl");
+    let text = serde_json::to_string(&line).map_err(|e| CommandError::Write {
+        dir: dir.to_path_buf(),
+        source: e.into(),
+    })?;
+    std::fs::write(&jsonl, text + "\n").map_err(|source| CommandError::Write {
+        dir: dir.to_path_buf(),
+        source,
+    })?;
+    Ok([path, jsonl])
 }
 
 /// `twin matchers`: the table on standard output.
@@ -1039,8 +1058,9 @@ pub fn main(args: MatchersArgs) -> Result<(), CommandError> {
             dir: dir.clone(),
             source,
         })?;
-        let path = show(&sets, &kinds, spec, dir)?;
-        say!("{}", path.display());
+        for path in show(&sets, &kinds, spec, dir)? {
+            say!("{}", path.display());
+        }
         return Ok(());
     }
     // Every seed's sets hold as many pairs as the first's.
