@@ -795,6 +795,57 @@ fn a_wide_second_schedule_rescues_large_guesses() {
     );
 }
 
+/// On sparse scans the line-assisted Lorentzian leaves the wide schedule to untrusted answers
+/// (`sparse_loose_wide`): from guesses 20 cm and 10° off Edmonton's 1° scans, where nearly every
+/// trusted answer fits loosely after going far, it keeps those answers as they are, in fewer
+/// iterations on many pairs and never more, right on all but at most two pairs fewer than
+/// with the wide schedule over two seeds; the dense logs' pairs of the row answer the same to
+/// the bit.
+#[test]
+fn sparse_trusted_answers_skip_the_wide_schedule() {
+    use robot::localization::Lorentz;
+    let kept = Lorentz::with_lines();
+    assert!(!kept.sparse_loose_wide);
+    let widened = Lorentz {
+        sparse_loose_wide: true,
+        ..Lorentz::with_lines()
+    };
+    let (mut right, mut fewer, mut sparse) = ([0usize; 2], 0, 0);
+    for seed in [7, 8] {
+        let sets = sets(150, seed);
+        let large = sets.last().expect("the large-guess row");
+        assert!(large.name.contains("20 cm"), "{}", large.name);
+        for case in &large.cases {
+            let a = kept.match_scans(&case.reference, &case.current, case.guess);
+            let b = widened.match_scans(&case.reference, &case.current, case.guess);
+            let is_sparse = robot::localization::beam_step_below(
+                &case.current.points(),
+                robot::localization::SPARSE_BEAM_STEP_RAD,
+            ) != Some(true);
+            if !is_sparse {
+                assert_eq!(a.pose, b.pose, "a dense pair moved");
+                continue;
+            }
+            sparse += 1;
+            assert!(a.iterations <= b.iterations, "{a:?} against {b:?}");
+            fewer += usize::from(a.iterations < b.iterations);
+            right[0] += usize::from(is_right(large, case, &a));
+            right[1] += usize::from(is_right(large, case, &b));
+        }
+    }
+    assert!(sparse >= 90, "{sparse} sparse pairs");
+    assert!(
+        fewer * 4 >= sparse,
+        "the wide schedule ran on {fewer} of {sparse}"
+    );
+    assert!(
+        right[0] + 2 >= right[1],
+        "right {} against {}",
+        right[0],
+        right[1]
+    );
+}
+
 /// The line-assisted Lorentzian also polishes its answer from before the last σ pass and keeps
 /// it when it fits clearly more points (`before_last_margin`), but only in the wide schedule:
 /// a sparse scan's first schedule ends with the point-to-line finish, which places the answer
@@ -1828,7 +1879,7 @@ fn a_first_match_stops_sooner() {
 /// point follows before the pass may end; only on scans that look clean, so those with 20 %
 /// outliers are matched as before, to the last bit. Over two seeds outside those it was chosen
 /// on (104–105, 150 pairs a row): every row right as often (a pair either way allowed), in as
-/// many searches within 5 % (half of them cost half), the synthetic rows' median translation
+/// many searches within 6 % (half of them cost half), the synthetic rows' median translation
 /// errors within a twentieth of a millimetre of before and under the 2 mm without
 /// outliers; some answers moved on the rows without outliers; Edmonton's 1° scans are not
 /// dense, with the same answers to the last bit. What it saves is time, which `cargo bench
@@ -1852,9 +1903,12 @@ fn a_dense_first_pass_starts_on_every_second_point() {
         moved["synthetic, 20 %"], 0,
         "a scan with outliers was thinned"
     );
+    // Since a sparse scan's trusted answers no longer run the wide schedule
+    // (`sparse_loose_wide`), the large guesses' Edmonton third, the same for both, dilutes the
+    // dense pairs' count less: 1.051 there on these seeds, 1.05 being the bound before.
     for (name, (_, searches, _)) in &rows {
         assert!(
-            f64::from(searches[1]) <= 1.05 * f64::from(searches[0]),
+            f64::from(searches[1]) <= 1.06 * f64::from(searches[0]),
             "{name}: searches {searches:?}"
         );
     }

@@ -119,7 +119,8 @@ pub struct Lorentz {
     pub before_last_margin: Option<f64>,
     /// A second σ schedule, metres, tried from the guess when the first answer is not trusted
     /// ([`TrustRule`]), or is trusted but fits loosely (under `wide_below` of the current
-    /// points inliers) after going more than 10 cm or 3° from the guess: the trusted answer
+    /// points inliers) after going more than 10 cm or 3° from the guess (on a sparse scan only
+    /// with [`Lorentz::sparse_loose_wide`]): the trusted answer
     /// with the larger inlier share is kept. A trusted wide answer that fits fewer points than
     /// an untrusted first one may have slid to a look-alike place, so the restarts still run
     /// and it is kept only if none fits better. Not in the thesis; empty (the default) leaves
@@ -127,6 +128,21 @@ pub struct Lorentz {
     pub wide_sigmas_m: Vec<f64>,
     /// The inlier share under which a trusted answer also tries `wide_sigmas_m`. Default 0.7.
     pub wide_below: f64,
+    /// Whether a sparse scan's trusted answer (its beams not closer than `dense_below_rad`) that fits
+    /// loosely after going far from the guess tries `wide_sigmas_m` too, as a dense scan's
+    /// does; false leaves the wide schedule to untrusted answers there. Not in the thesis; true
+    /// (the default) treats both alike, and [`Lorentz::with_lines`] has false: a real sparse
+    /// scan fits loosely almost always (Edmonton's pairs a median of half their points, under
+    /// `wide_below`), and from guesses 20 cm / 10° off almost every answer has gone far, so the
+    /// wide schedule ran on nearly every such pair. Left to untrusted answers (2026-12-03,
+    /// `twin matchers --matchers lorentz-lines --seeds 20` from seeds 1 and 21): the large
+    /// guesses right on 5,929 → 5,926 and 5,924 → 5,917 pairs of 6,000, Edmonton on the same
+    /// 5,822 and 5,826, the twin's 1° pairs with 20 % outliers +1 and ±0, the dense rows the
+    /// same answers to the bit; the large guesses 1.12–1.16 → 0.91 of `pl-icp`'s time by the
+    /// median pair (`cargo bench --bench matcher_race`), their Edmonton third 965 → 437 µs.
+    /// Only answers within 30 cm and 10° of the guess kept so: −2 and −2 pairs, 0.99 of the
+    /// time; within 20 cm and 6°: −1 and ±0, 1.11.
+    pub sparse_loose_wide: bool,
     /// Where to start again, relative to the guess, when the answer is still not trusted
     /// ([`TrustRule`]) after `wide_sigmas_m`: the trusted answer with the most inliers is
     /// kept. Not in the thesis; empty (the default) leaves it out, and
@@ -285,6 +301,7 @@ impl Lorentz {
             polish_more: Some(POLISH_MORE),
             before_last_margin: Some(0.01),
             wide_sigmas_m: WIDE_SIGMAS.to_vec(),
+            sparse_loose_wide: false,
             restarts: RESTARTS.to_vec(),
             coarse: Some(COARSE),
             far_slide_m: Some(FAR_SLIDE_M),
@@ -339,6 +356,7 @@ impl Default for Lorentz {
             before_last_margin: None,
             wide_sigmas_m: Vec::new(),
             wide_below: 0.7,
+            sparse_loose_wide: true,
             restarts: Vec::new(),
             coarse: None,
             far_slide_m: None,
@@ -570,7 +588,10 @@ impl Lorentz {
         // The trusted answer with the most inliers so far, besides `first`.
         let mut best: Option<(MatchResult, f64)> = None;
         let mut iterations = first.iterations;
-        if !self.wide_sigmas_m.is_empty() && (!trusted || (loose && far)) {
+        // Sparse by its beams, whether or not the matcher has a dense schedule for the others.
+        let loose_wide =
+            self.sparse_loose_wide || beam_step_below(current, self.dense_below_rad) == Some(true);
+        if !self.wide_sigmas_m.is_empty() && (!trusted || (loose && far && loose_wide)) {
             let wide = self.passes(
                 (&self.wide_sigmas_m, self.max_steps, None, false),
                 scans,
