@@ -353,7 +353,9 @@ impl PointToLine {
             for c in candidates.iter().filter(|c| c.segment <= limit) {
                 pairs.push(c.pair);
                 found.error += c.segment;
-                hash.add(c.index, c.nearest, c.neighbour);
+                if self.stop_on_repeated_pairs {
+                    hash.add(c.index, c.nearest, c.neighbour);
+                }
             }
             found.kept = pairs.len();
             let repeated = self.stop_on_repeated_pairs && {

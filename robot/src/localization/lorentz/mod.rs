@@ -588,10 +588,15 @@ impl Lorentz {
         // The trusted answer with the most inliers so far, besides `first`.
         let mut best: Option<(MatchResult, f64)> = None;
         let mut iterations = first.iterations;
-        // Sparse by its beams, whether or not the matcher has a dense schedule for the others.
-        let loose_wide =
-            self.sparse_loose_wide || beam_step_below(current, self.dense_below_rad) == Some(true);
-        if !self.wide_sigmas_m.is_empty() && (!trusted || (loose && far && loose_wide)) {
+        // A loose far answer tries the wide schedule on a scan dense by its beams (whether or
+        // not the matcher has a dense schedule), or anywhere with `sparse_loose_wide`; the
+        // beams are only looked at when it comes to that.
+        let loose_wide = || {
+            self.sparse_loose_wide
+                || dense
+                || beam_step_below(current, self.dense_below_rad) == Some(true)
+        };
+        if !self.wide_sigmas_m.is_empty() && (!trusted || (loose && far && loose_wide())) {
             let wide = self.passes(
                 (&self.wide_sigmas_m, self.max_steps, None, false),
                 scans,
