@@ -8,7 +8,7 @@
 //! |---|---|---|
 //! | `ls` | [`LeastSquares`] point-to-point ICP, the baseline | thesis §5.2 |
 //! | `lorentz` | [`Lorentz`]: Lorentzian error, Newton–Levenberg–Marquardt, σ 2 → 5 → 0.5 cm | thesis §3.4, App. F |
-//! | `lorentz-lines` | the same with line-assisted association; on dense scans point-to-line residuals where the lines spread, σ narrowing from 5 cm and pairs crowded onto one reference point left out, one NLM step a search in the first match, a point-to-line polish, a wide second σ schedule, restarts and a coarse correlative search when an answer is not trusted (not in the thesis) | thesis §3.4.3, App. E.3 |
+//! | `lorentz-lines` | the same with line-assisted association; on dense scans point-to-line residuals where the lines spread, σ narrowing from 5 cm and pairs crowded onto one reference point left out, one NLM step a search in the first match, a point-to-line polish, a wide second σ schedule, restarts and a coarse correlative search when an answer is not trusted, cut short when the first restarts come back to an answer whose only fault is too little overlap (not in the thesis) | thesis §3.4.3, App. E.3 |
 //! | `mbicp` | [`Mbicp`]: metric-based ICP | 002 §2.2 |
 //! | `pl-icp` | [`PointToLine`]: point-to-line ICP with CSM's defaults, the reference | Censi 2008 |
 //!
@@ -37,10 +37,10 @@ pub use level::{LEVEL_TOLERANCE_RAD, LevelLocaliser};
 pub use lorentz::{
     COARSE, CROWD_RATIO, DENSE_SIGMAS, EARLY_CONVERGENCE, FAR_SLIDE_M, FIRST_MATCH_CONVERGENCE,
     FIRST_PASS_CONVERGENCE, FIRST_PASS_ENOUGH, FIRST_PASS_SURFACE_POINTS, FIRST_PASS_THINNING,
-    FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD, Lorentz, POLISH_MORE,
-    QuickFinish, SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH,
-    SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_QUICK, SPARSE_SIGMAS, SPARSE_START, SlideCheck,
-    StartRounds, THESIS_SIGMAS, Thinning, WIDE_SIGMAS,
+    FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD, Lorentz, MERGE_REACH,
+    POLISH_MORE, QuickFinish, RESTARTS_AGREE, RestartsAgree, SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE,
+    SPARSE_FINISH, SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_QUICK, SPARSE_SIGMAS, SPARSE_START,
+    SlideCheck, StartRounds, THESIS_SIGMAS, Thinning, WIDE_SIGMAS,
 };
 pub use map::{MapBuilder, MapConfig, MatchStats, Placed};
 pub use matcher::{

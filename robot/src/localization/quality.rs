@@ -138,6 +138,16 @@ impl TrustRule {
             && q.step[1] <= self.max_step_rad
     }
 
+    /// Whether a match of this quality would be trusted if enough of the scan fitted: it passes
+    /// every test of [`trusts`](Self::trusts) but the share of inliers (the scans may overlap
+    /// too little for it).
+    pub fn trusts_but_overlap(&self, q: &MatchQuality) -> bool {
+        self.trusts(&MatchQuality {
+            inlier_share: 1.0,
+            ..*q
+        })
+    }
+
     /// The quality of `pose` (the current frame in the reference frame) for the current scan's
     /// points `current` against `reference`.
     pub fn assess(
@@ -1096,5 +1106,47 @@ mod tests {
             (with_box.shift_m * with_box.direction[0] - 0.08).abs() < 0.01,
             "{with_box:?}"
         );
+    }
+
+    /// An answer that fits too few points but fits them well and is pinned down is one the
+    /// rule would trust with more overlap; one that also fits badly, or is free along a wall,
+    /// or pulled aside, is not.
+    #[test]
+    fn only_the_overlap_can_be_set_aside() {
+        let rule = TrustRule::default();
+        let good = MatchQuality {
+            inliers: 120,
+            inlier_share: 0.8,
+            rms_m: 0.015,
+            sigma: [0.003, 0.004, 0.001],
+            sparse: false,
+            step: [0.002, 0.001],
+        };
+        assert!(rule.trusts(&good) && rule.trusts_but_overlap(&good));
+        let little = MatchQuality {
+            inlier_share: 0.4,
+            ..good
+        };
+        assert!(!rule.trusts(&little) && rule.trusts_but_overlap(&little));
+        for other in [
+            MatchQuality {
+                rms_m: 0.04,
+                ..little
+            },
+            MatchQuality {
+                sigma: [0.003, 0.02, 0.001],
+                ..little
+            },
+            MatchQuality {
+                step: [0.04, 0.001],
+                ..little
+            },
+            MatchQuality {
+                inliers: 10,
+                ..little
+            },
+        ] {
+            assert!(!rule.trusts_but_overlap(&other), "{other:?}");
+        }
     }
 }

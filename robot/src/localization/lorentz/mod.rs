@@ -18,10 +18,10 @@ mod settings;
 pub use settings::{
     COARSE, CROWD_RATIO, DENSE_SIGMAS, EARLY_CONVERGENCE, FAR_SLIDE_M, FIRST_MATCH_CONVERGENCE,
     FIRST_PASS_CONVERGENCE, FIRST_PASS_ENOUGH, FIRST_PASS_SURFACE_POINTS, FIRST_PASS_THINNING,
-    FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD, POLISH_MORE,
-    QuickFinish, RESTARTS, SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH,
-    SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_QUICK, SPARSE_SIGMAS, SPARSE_START, SlideCheck,
-    StartRounds, THESIS_SIGMAS, Thinning, WIDE_SIGMAS,
+    FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD, MERGE_REACH,
+    POLISH_MORE, QuickFinish, RESTARTS, RESTARTS_AGREE, RestartsAgree, SLIDE_CHECK,
+    SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH, SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_QUICK,
+    SPARSE_SIGMAS, SPARSE_START, SlideCheck, StartRounds, THESIS_SIGMAS, Thinning, WIDE_SIGMAS,
 };
 
 use super::correlative;
@@ -32,7 +32,7 @@ use super::plicp::PointToLine;
 use super::quality::{TrustRule, slide_vote};
 use super::scan::{SPARSE_BEAM_STEP_RAD, ScanPoints, beam_step_below};
 use crate::geometry::Pose2;
-use passes::Assist;
+use passes::{Assist, Visits};
 use settings::{COARSE_MARGIN, WIDE_AFTER};
 
 /// The Lorentzian matcher.
@@ -233,6 +233,21 @@ pub struct Lorentz {
     /// leaves `first_pass_convergence` to every schedule, and [`Lorentz::with_lines`] has
     /// [`FIRST_MATCH_CONVERGENCE`].
     pub first_match_convergence: Option<Convergence>,
+    /// How near (metres, radians) a restart's or a coarse search's start's estimate must come
+    /// to where an earlier one of the same match ended the same σ pass to take that one's
+    /// answer. From there the passes would follow nearly the same path to the same answer, so
+    /// the searches are saved, and the restarts that come back are cheap. Not in the thesis;
+    /// `None` (the default) runs every start to its end, and [`Lorentz::with_lines`] has
+    /// [`MERGE_REACH`].
+    pub merge_reach: Option<(f64, f64)>,
+    /// When an untrusted answer fits its points well and is pinned down, its only fault being
+    /// that too few of the current points fit (the scans overlap little), and the first of the
+    /// restarts all come back to it: the other restarts and the coarse search are left out,
+    /// and it is the answer. Its basin holds the guess's neighbourhood on both sides, and no
+    /// start finds a trusted answer where the scans overlap too little for one. Not in the
+    /// thesis; `None` (the default) runs every restart, and [`Lorentz::with_lines`] has
+    /// [`RESTARTS_AGREE`].
+    pub restarts_agree: Option<RestartsAgree>,
     /// For dense scans (as `dense_sigmas_m`), in the first σ pass of every schedule but the
     /// wide one, when the current scan looks clean ([`Thinning`]: few points far from both
     /// neighbours, as outliers are): its first searches pair every second current point only,
@@ -317,6 +332,8 @@ impl Lorentz {
             early_convergence: Some(EARLY_CONVERGENCE),
             first_pass_convergence: Some(FIRST_PASS_CONVERGENCE),
             first_match_convergence: Some(FIRST_MATCH_CONVERGENCE),
+            merge_reach: Some(MERGE_REACH),
+            restarts_agree: Some(RESTARTS_AGREE),
             first_pass_thinning: Some(FIRST_PASS_THINNING),
             sparse_early_convergence: Some(SPARSE_EARLY_CONVERGENCE),
             sigmas_m: SPARSE_SIGMAS.to_vec(),
@@ -371,6 +388,8 @@ impl Default for Lorentz {
             first_pass_surfaces: None,
             first_pass_convergence: None,
             first_match_convergence: None,
+            merge_reach: None,
+            restarts_agree: None,
             first_pass_thinning: None,
             sparse_early_convergence: None,
             sparse_finish: None,
@@ -548,6 +567,7 @@ impl Lorentz {
             lines.as_ref(),
             guess,
             last,
+            None,
         );
         let more = !self.restarts.is_empty() || !self.wide_sigmas_m.is_empty();
         if !more && first_spread.is_none() {
@@ -568,6 +588,7 @@ impl Lorentz {
                 lines.as_ref(),
                 guess,
                 last,
+                None,
             );
             let iterations = first.iterations + again.iterations;
             if rule.trusts(&again.quality)
@@ -603,6 +624,7 @@ impl Lorentz {
                 lines.as_ref(),
                 guess,
                 last,
+                None,
             );
             iterations += wide.iterations;
             if rule.trusts(&wide.quality) {
@@ -643,7 +665,7 @@ impl Lorentz {
                 lines.as_ref(),
                 (guess, window, 1),
                 floor,
-                last,
+                (last, &mut Visits::default()),
             );
             let iterations = chosen.iterations + more;
             return MatchResult {
@@ -668,6 +690,15 @@ impl Lorentz {
                 *best = Some((result, share));
             }
         };
+        // The restarts and the coarse search's starts run one schedule: one that comes to where
+        // an earlier one ended a pass takes its answer.
+        let mut visits = Visits::default();
+        // With `restarts_agree`, while every restart so far came back to a first answer whose
+        // only fault is its overlap: how many did, and whether enough did to end the rescue.
+        let mut agree = self
+            .restarts_agree
+            .filter(|_| rule.trusts_but_overlap(&first.quality));
+        let (mut back, mut agreed) = (0, false);
         for offset in &self.restarts {
             let start = guess.compose(offset);
             let result = self.passes(
@@ -676,12 +707,25 @@ impl Lorentz {
                 lines.as_ref(),
                 start,
                 last,
+                Some(&mut visits),
             );
+            let came_back = agree.map(|agree| agree.came_back(&first.pose, &result.pose));
             keep(result, f64::NEG_INFINITY, &mut best);
+            match (agree, came_back) {
+                (Some(agree), Some(true)) => {
+                    back += 1;
+                    if back == agree.restarts {
+                        agreed = true;
+                        break;
+                    }
+                }
+                _ => agree = None,
+            }
         }
         // Still nothing: the coarse search's starts, whose answers must fit clearly more
-        // points than the first.
+        // points than the first (unless the restarts agreed with it).
         if best.is_none()
+            && !agreed
             && let Some((window, count)) = &self.coarse
         {
             let floor = first.quality.inlier_share + COARSE_MARGIN;
@@ -691,7 +735,7 @@ impl Lorentz {
                 lines.as_ref(),
                 (guess, window, *count),
                 floor,
-                last,
+                (last, &mut visits),
             );
             iterations += more;
             best = found.map(|result| {
@@ -707,7 +751,8 @@ impl Lorentz {
     /// The σ passes of `sigmas` from each of the `count` best starts of the coarse search over
     /// `window` around `guess` ([`correlative::best_starts`]): of their trusted answers that
     /// fit more than `floor` of the current points, the one that fits most, and the iterations
-    /// of all of them.
+    /// of all of them. A start that comes to where one noted in `visits` ended a pass takes
+    /// that one's answer ([`Lorentz::merge_reach`]).
     fn match_coarse_starts(
         &self,
         (sigmas, crowd): (&[f64], Option<f64>),
@@ -715,7 +760,7 @@ impl Lorentz {
         lines: Option<&Assist>,
         (guess, window, count): (Pose2, &correlative::Window, usize),
         floor: f64,
-        last: &mut [Option<LastNearest>],
+        (last, visits): (&mut [Option<LastNearest>], &mut Visits),
     ) -> (Option<MatchResult>, u32) {
         let rule = TrustRule::default();
         let (from, to) = (&reference.points.xy, &current.xy);
@@ -728,6 +773,7 @@ impl Lorentz {
                 lines,
                 start,
                 last,
+                Some(&mut *visits),
             );
             iterations += result.iterations;
             let share = result.quality.inlier_share;
@@ -809,6 +855,7 @@ impl Lorentz {
             lines.as_ref(),
             start,
             last,
+            None,
         );
         let again = self.finished((reference, current), dense, again, last);
         let iterations = matched.iterations + again.iterations;

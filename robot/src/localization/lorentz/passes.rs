@@ -82,6 +82,46 @@ pub(super) struct Assist<'a> {
     pub(super) spread: Option<f64>,
 }
 
+/// Where the earlier starts of one match ended their σ passes and what each answered, for
+/// [`Lorentz::merge_reach`]: a later start of the same schedule whose estimate comes that near
+/// to where an earlier one ended the same pass goes on as that one did, so it takes that
+/// one's answer instead of searching its way there again.
+#[derive(Default)]
+pub(super) struct Visits {
+    /// Each finished start's pass ends: the pass, the estimate `[θ, x, y]` at its end, and the
+    /// start's answer (an index into `answers`).
+    ends: Vec<(usize, [f64; 3], usize)>,
+    answers: Vec<MatchResult>,
+}
+
+impl Visits {
+    /// The answer of the earliest start that ended pass `pass` within `reach` (metres,
+    /// radians) of `phi`.
+    fn met(
+        &self,
+        pass: usize,
+        phi: [f64; 3],
+        (reach_m, reach_rad): (f64, f64),
+    ) -> Option<MatchResult> {
+        self.ends
+            .iter()
+            .find(|(p, end, _)| {
+                *p == pass
+                    && (phi[1] - end[1]).hypot(phi[2] - end[2]) <= reach_m
+                    && wrap_angle(phi[0] - end[0]).abs() <= reach_rad
+            })
+            .map(|&(_, _, answer)| self.answers[answer])
+    }
+
+    /// Notes a finished start: where it ended each pass, and its answer.
+    fn note(&mut self, ends: &[(usize, [f64; 3])], answer: MatchResult) {
+        let index = self.answers.len();
+        self.answers.push(answer);
+        self.ends
+            .extend(ends.iter().map(|&(pass, end)| (pass, end, index)));
+    }
+}
+
 /// Whether at most `thinning.most_lonely` of the points `xy` (in beam order) lie farther than
 /// `thinning.lonely_m` from both their neighbours: a scan clean enough to be thinned. The first
 /// and last points, with one neighbour each, are never lonely.
@@ -119,6 +159,9 @@ impl Lorentz {
     /// answer judged by the trust rule.
     /// `last` keeps each current point's last nearest reference point from one search to the
     /// next, and from one call to the next of a match (the same answers, searched less).
+    /// With `visits` (and [`Lorentz::merge_reach`]), a search that brings the estimate near to
+    /// where an earlier start noted there ended the same pass ends the passes with that start's
+    /// answer (and this one's iterations); a start that finishes is noted there.
     pub(super) fn passes(
         &self,
         (sigmas, steps, crowd, first_match): (&[f64], u32, Option<f64>, bool),
@@ -126,8 +169,12 @@ impl Lorentz {
         lines: Option<&Assist>,
         guess: Pose2,
         last: &mut [Option<LastNearest>],
+        mut visits: Option<&mut Visits>,
     ) -> MatchResult {
         let mut phi = [guess.theta, guess.x, guess.y];
+        let merge = self.merge_reach.filter(|_| visits.is_some());
+        // Where this start ended each pass, for `visits`.
+        let mut ends = Vec::new();
         let mut moved = Vec::with_capacity(current.len());
         let mut sources = Vec::with_capacity(current.len());
         let mut targets = Vec::with_capacity(current.len());
@@ -276,6 +323,14 @@ impl Lorentz {
                     two_back = None;
                     continue;
                 }
+                if let Some(reach) = merge
+                    && let Some(earlier) = visits.as_ref().and_then(|v| v.met(pass, phi, reach))
+                {
+                    return MatchResult {
+                        iterations: result.iterations,
+                        ..earlier
+                    };
+                }
                 if stop.reached(&step) {
                     result.settled = true;
                     break;
@@ -287,6 +342,9 @@ impl Lorentz {
                     break;
                 }
                 two_back = Some(before);
+            }
+            if merge.is_some() {
+                ends.push((pass, phi));
             }
         }
         result.pose = Pose2::new(phi[1], phi[2], wrap_angle(phi[0]));
@@ -315,6 +373,9 @@ impl Lorentz {
             if quality.inlier_share > result.quality.inlier_share + margin {
                 (result.pose, result.quality) = (earlier, quality);
             }
+        }
+        if let Some(visits) = visits.as_mut().filter(|_| merge.is_some()) {
+            visits.note(&ends, result);
         }
         result
     }
