@@ -693,13 +693,17 @@ impl Lorentz {
         // The restarts and the coarse search's starts run one schedule: one that comes to where
         // an earlier one ended a pass takes its answer.
         let mut visits = Visits::default();
-        // With `restarts_agree`, while every restart so far came back to a first answer whose
-        // only fault is its overlap: how many did, and whether enough did to end the rescue.
-        let mut agree = self
+        // With `restarts_agree`, for a first answer whose only fault is its overlap: how many
+        // restarts in a row from the first came back to it. Enough, and the rescue ends.
+        let agree = self
             .restarts_agree
             .filter(|_| rule.trusts_but_overlap(&first.quality));
-        let (mut back, mut agreed) = (0, false);
-        for offset in &self.restarts {
+        let mut back = 0;
+        let agreed = |back: usize| agree.is_some_and(|agree| back >= agree.restarts);
+        for (tried, offset) in self.restarts.iter().enumerate() {
+            if agreed(back) {
+                break;
+            }
             let start = guess.compose(offset);
             let result = self.passes(
                 (sigmas, self.max_steps, crowd, false),
@@ -709,23 +713,15 @@ impl Lorentz {
                 last,
                 Some(&mut visits),
             );
-            let came_back = agree.map(|agree| agree.came_back(&first.pose, &result.pose));
+            let came_back = back == tried
+                && agree.is_some_and(|agree| agree.came_back(&first.pose, &result.pose));
+            back += usize::from(came_back);
             keep(result, f64::NEG_INFINITY, &mut best);
-            match (agree, came_back) {
-                (Some(agree), Some(true)) => {
-                    back += 1;
-                    if back == agree.restarts {
-                        agreed = true;
-                        break;
-                    }
-                }
-                _ => agree = None,
-            }
         }
         // Still nothing: the coarse search's starts, whose answers must fit clearly more
         // points than the first (unless the restarts agreed with it).
         if best.is_none()
-            && !agreed
+            && !agreed(back)
             && let Some((window, count)) = &self.coarse
         {
             let floor = first.quality.inlier_share + COARSE_MARGIN;

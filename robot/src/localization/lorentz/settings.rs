@@ -645,7 +645,7 @@ pub const MERGE_REACH: (f64, f64) = (1e-3, 0.01 * std::f64::consts::PI / 180.0);
 /// and `reach_rad` of it.
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct RestartsAgree {
-    /// How many restarts, the first in their order, must come back.
+    /// How many restarts, the first in their order, must come back (0: no restart runs).
     pub restarts: usize,
     /// How near to the answer a restart's answer must come back, metres.
     pub reach_m: f64,
