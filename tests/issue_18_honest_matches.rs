@@ -7,7 +7,7 @@ use robot::localization::{
     MapBuilder, MapConfig, MatcherKind, RangeScan, Reference, ScanMatcher, TrustRule,
 };
 use robot::{Pose2, Stamp};
-use sim::commands::matchers::{self, CaseSet, Matched, Row};
+use sim::commands::matchers::{self, CaseSet, Matched, Row, reach};
 use std::collections::BTreeMap;
 use std::process::Command;
 
@@ -2539,6 +2539,43 @@ fn restarts_that_come_back_end_the_rescue() {
                 both[2] * 10 <= neither[2] * 9,
                 "{row}: searches {both:?} against {neither:?}"
             );
+        }
+    }
+}
+
+/// The scans alone, with no matcher, say where a corrected log's pose cannot be reached: on
+/// Freiburg 101's pairs 233 and 249 every pose within 10 cm and 2° of the log's fits at least 5
+/// in 100 of the current points fewer (within 2 cm of the reference's surfaces, the laser's
+/// accuracy) than a pose 13–18 cm from it, while the log's own pose fits under a tenth of them.
+/// On an ordinary Belgioioso pair every pose that fits best lies within the tolerance, and no
+/// synthetic pair, whose truth is exact, is out of reach.
+#[test]
+fn the_scans_alone_say_where_a_corrected_pose_is_out_of_reach() {
+    let judge = reach::Judge::LASER;
+    let log = |name: &str, n: usize| {
+        let path = repo().join(format!("tests/data/corrected/{name}-corrected.log.gz"));
+        let error = matchers::GuessError {
+            sigma_m: 0.05,
+            sigma_rad: 2f64.to_radians(),
+        };
+        matchers::log_set(name, &path, n, error, 1).expect("the bundled log loads")
+    };
+    let freiburg = log("freiburg-101", 250);
+    for pair in [233, 249] {
+        let j = judge.judge(&freiburg.cases[pair]);
+        assert_eq!(j.reach, reach::Reach::Out, "pair {pair}: {j:?}");
+        assert!(j.at_truth * 10 < j.points, "pair {pair}: {j:?}");
+        let off = freiburg.cases[pair].truth.relative(&j.outside.pose);
+        assert!(off.x.hypot(off.y) > 0.12, "pair {pair}: {j:?}");
+    }
+    let belgioioso = log("belgioioso", 11);
+    let j = judge.judge(&belgioioso.cases[10]);
+    assert_eq!(j.reach, reach::Reach::Decided, "{j:?}");
+    assert!(j.inside.points >= j.at_truth, "{j:?}");
+    for set in sets(12, 3).iter().filter(|s| s.name.contains("synthetic")) {
+        for (k, case) in set.cases.iter().enumerate() {
+            let j = judge.judge(case);
+            assert_ne!(j.reach, reach::Reach::Out, "{} pair {k}: {j:?}", set.name);
         }
     }
 }

@@ -123,7 +123,7 @@ impl Moments {
     /// instructions of [`lines_of`], itself a tenth of a `lorentz-lines` match. The line kept
     /// is this fit too since 2026-11-28: refitting it by the angle at the end took 3 % of a
     /// synthetic match (`perf`), and its answers moved by less than the tests' margins
-    /// (README, *Cheaper first passes and lines*).
+    /// (`studies/scan-matching-notebook.md`, *Cheaper first passes and lines*).
     fn fit_quick(&self) -> Fit {
         let (centroid, [cxx, cxy, cyy], small, root) = self.moments();
         let (a, b) = (cxx - cyy, 2.0 * cxy);
@@ -151,7 +151,7 @@ impl Moments {
     /// two eigenvalues (`√((cxx − cyy)² + 4 cxy²)`).
     fn moments(&self) -> ([f64; 2], [f64; 3], f64, f64) {
         // One division and five products instead of five divisions: the growth waits on the
-        // divider (README, *Cheaper first passes and lines*).
+        // divider (`studies/scan-matching-notebook.md`, *Cheaper first passes and lines*).
         let inv = 1.0 / self.n;
         let (mx, my) = (self.sx * inv, self.sy * inv);
         let cxx = self.sxx * inv - mx * mx;

@@ -24,6 +24,8 @@
 //!
 //! Everything but the times is the same on every run and machine for a given seed.
 
+pub mod reach;
+
 use super::CommandError;
 use super::map::PairLine;
 use crate::commands::montecarlo::pairs::PairMaker;

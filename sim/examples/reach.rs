@@ -1,0 +1,85 @@
+//! How many of the SLAM-corrected logs' pairs any matcher could get right against the logs'
+//! poses, judged by the scans alone (`sim::commands::matchers::reach`): for the first 300
+//! consecutive pairs of each log, the real rows of `twin matchers`, every pair whose verdict is
+//! not *decided*, then a line a log with the pairs out of reach and the share right at most.
+//!
+//! ```sh
+//! cargo run --release --example reach              # band 2 cm (the laser's ±2 cm), margin 0.05
+//! cargo run --release --example reach -- 0.05      # the trust rule's 5 cm band
+//! cargo run --release --example reach -- 0.02 0.1  # a margin of 10 in 100 points
+//! ```
+//!
+//! About a minute and a half on two cores.
+
+use rayon::prelude::*;
+use sim::commands::matchers::reach::{Judge, Reach};
+use sim::commands::matchers::{GuessError, log_set};
+use std::path::Path;
+
+fn main() {
+    let arg = |k: usize, default: f64| -> f64 {
+        match std::env::args().nth(k) {
+            None => default,
+            Some(v) => v.parse().unwrap_or_else(|_| {
+                eprintln!(
+                    "reach: expected a number for {}, got {v:?}",
+                    ["", "BAND (metres)", "MARGIN (a share)"][k]
+                );
+                std::process::exit(2)
+            }),
+        }
+    };
+    let judge = Judge {
+        band_m: arg(1, Judge::LASER.band_m),
+        margin: arg(2, Judge::LASER.margin),
+        ..Judge::LASER
+    };
+    // The guesses play no part: only the pairs and their poses are judged.
+    let error = GuessError {
+        sigma_m: 0.05,
+        sigma_rad: 2f64.to_radians(),
+    };
+    println!(
+        "band {:.0} mm, margin {} of the current points",
+        judge.band_m * 1e3,
+        judge.margin
+    );
+    for name in ["belgioioso", "freiburg-101", "edmonton"] {
+        let log = Path::new("tests/data/corrected").join(format!("{name}-corrected.log.gz"));
+        let set = log_set(name, &log, 300, error, 1).expect("the bundled logs load");
+        let judged: Vec<_> = set.cases.par_iter().map(|c| judge.judge(c)).collect();
+        let mut out = Vec::new();
+        let mut undecided = 0;
+        for (k, j) in judged.iter().enumerate() {
+            if j.reach == Reach::Decided {
+                continue;
+            }
+            let off = |p: &robot::Pose2| {
+                let o = set.cases[k].truth.relative(p);
+                (o.x.hypot(o.y) * 1e3, o.theta.to_degrees())
+            };
+            let (i, o) = (off(&j.inside.pose), off(&j.outside.pose));
+            println!(
+                "{name} pair {k}: {:?}; of {} points, {} at the log's pose, {} inside ({:.0} mm, {:.2}°), {} outside ({:.0} mm, {:.2}°)",
+                j.reach,
+                j.points,
+                j.at_truth,
+                j.inside.points,
+                i.0,
+                i.1,
+                j.outside.points,
+                o.0,
+                o.1,
+            );
+            match j.reach {
+                Reach::Out => out.push(k),
+                _ => undecided += 1,
+            }
+        }
+        println!(
+            "{name}: {} pairs, {undecided} undecided, out of reach {out:?}: at most {:.4} right",
+            judged.len(),
+            1.0 - out.len() as f64 / judged.len() as f64
+        );
+    }
+}
