@@ -17,21 +17,33 @@ use sim::commands::matchers::{GuessError, log_set};
 use std::path::Path;
 
 fn main() {
-    let arg = |k: usize, default: f64| -> f64 {
-        match std::env::args().nth(k) {
-            None => default,
-            Some(v) => v.parse().unwrap_or_else(|_| {
-                eprintln!(
-                    "reach: expected a number for {}, got {v:?}",
-                    ["", "BAND (metres)", "MARGIN (a share)"][k]
-                );
+    // Each argument with what it may be: BAND in metres, above 0 and at most 1; MARGIN a share
+    // of the points, 0 to 1.
+    let arg = |k: usize, what: &str, default: f64, ok: fn(f64) -> bool| -> f64 {
+        let Some(v) = std::env::args().nth(k) else {
+            return default;
+        };
+        match v.parse::<f64>() {
+            Ok(x) if ok(x) => x,
+            _ => {
+                eprintln!("reach: expected {what}, got {v:?}");
                 std::process::exit(2)
-            }),
+            }
         }
     };
     let judge = Judge {
-        band_m: arg(1, Judge::LASER.band_m),
-        margin: arg(2, Judge::LASER.margin),
+        band_m: arg(
+            1,
+            "BAND in metres, above 0 and at most 1",
+            Judge::LASER.band_m,
+            |x| x > 0.0 && x <= 1.0,
+        ),
+        margin: arg(
+            2,
+            "MARGIN, a share of the points from 0 to 1",
+            Judge::LASER.margin,
+            |x| (0.0..=1.0).contains(&x),
+        ),
         ..Judge::LASER
     };
     // The guesses play no part: only the pairs and their poses are judged.

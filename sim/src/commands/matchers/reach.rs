@@ -21,7 +21,7 @@
 //! inside is the best found. `cargo run --release --example reach` prints it for the corrected
 //! logs.
 
-use super::Case;
+use super::{Case, off_truth};
 use robot::Pose2;
 use robot::localization::correlative::{Window, best_starts};
 use robot::localization::{Reference, TrustRule};
@@ -99,8 +99,8 @@ impl Judge {
             pose,
         };
         let inside = |p: &Pose2| {
-            let off = truth.relative(p);
-            off.x.hypot(off.y) <= self.tolerance_m && off.theta.abs() <= self.tolerance_rad
+            let (m, rad) = off_truth(case, p);
+            m <= self.tolerance_m && rad <= self.tolerance_rad
         };
         let outside = |p: &Pose2| !inside(p);
         let best = |a: Scored, b: Scored| if b.points > a.points { b } else { a };
@@ -139,7 +139,8 @@ impl Judge {
                 best_out = best(best_out, found);
             }
         }
-        let slack = (self.margin * current.len() as f64).ceil() as usize;
+        // At least one point: a scan with nothing to fit (no returns) puts no side ahead.
+        let slack = ((self.margin * current.len() as f64).ceil() as usize).max(1);
         if best_in.points + slack <= best_out.points {
             // Out of reach is claimed only after a closer look inside.
             let fine = grid(truth, 10, 0.01, 40, 0.05f64.to_radians())
@@ -229,4 +230,33 @@ fn climb(score: &dyn Fn(Pose2) -> Scored, start: Scored, keep: &dyn Fn(&Pose2) -
         }
     }
     at
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use robot::localization::RangeScan;
+
+    /// A scan that returned nothing has no point to fit: neither side is ahead, so the pair is
+    /// undecided, not out of reach, and nothing panics.
+    #[test]
+    fn a_scan_without_returns_decides_nothing() {
+        let empty = RangeScan::new(-1.5, 0.0087, 32.0, vec![32.0; 361]);
+        let wall = RangeScan::new(-1.5, 0.0087, 32.0, vec![2.0; 361]);
+        for (reference, current) in [(&empty, &wall), (&wall, &empty), (&empty, &empty)] {
+            let case = Case {
+                reference: reference.clone(),
+                current: current.clone(),
+                truth: Pose2::new(0.1, 0.0, 0.0),
+                guess: Pose2::new(0.1, 0.0, 0.0),
+            };
+            let judged = Judge::LASER.judge(&case);
+            assert_eq!(judged.reach, Reach::Undecided, "{judged:?}");
+            assert_eq!(
+                judged.inside.points + judged.outside.points,
+                0,
+                "{judged:?}"
+            );
+        }
+    }
 }
