@@ -16,12 +16,13 @@ mod passes;
 mod settings;
 
 pub use settings::{
-    COARSE, CROWD_RATIO, DENSE_SIGMAS, EARLY_CONVERGENCE, FAR_SLIDE_M, FIRST_MATCH_CONVERGENCE,
-    FIRST_PASS_CONVERGENCE, FIRST_PASS_ENOUGH, FIRST_PASS_SURFACE_POINTS, FIRST_PASS_THINNING,
-    FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD, MERGE_REACH,
-    POLISH_MORE, QuickFinish, RESTARTS, RESTARTS_AGREE, RestartsAgree, SLIDE_CHECK,
-    SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH, SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_QUICK,
-    SPARSE_SIGMAS, SPARSE_START, SlideCheck, StartRounds, THESIS_SIGMAS, Thinning, WIDE_SIGMAS,
+    CLEAN_PASS_ENOUGH, COARSE, CROWD_RATIO, DENSE_SIGMAS, EARLY_CONVERGENCE, FAR_SLIDE_M,
+    FIRST_MATCH_CONVERGENCE, FIRST_PASS_CONVERGENCE, FIRST_PASS_ENOUGH, FIRST_PASS_SURFACE_POINTS,
+    FIRST_PASS_THINNING, FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD,
+    MERGE_REACH, POLISH_MORE, QuickFinish, RESTART_SHORTFALL, RESTARTS, RESTARTS_AGREE,
+    RestartsAgree, SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH,
+    SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_QUICK, SPARSE_SIGMAS, SPARSE_START, SlideCheck,
+    StartRounds, THESIS_SIGMAS, Thinning, WIDE_SIGMAS,
 };
 
 use super::correlative;
@@ -145,7 +146,7 @@ pub struct Lorentz {
     pub sparse_loose_wide: bool,
     /// Where to start again, relative to the guess, when the answer is still not trusted
     /// ([`TrustRule`]) after `wide_sigmas_m`: the trusted answer with the most inliers is
-    /// kept. Not in the thesis; empty (the default) leaves it out, and
+    /// kept (if it fits nearly as many as the first, `restart_shortfall`). Not in the thesis; empty (the default) leaves it out, and
     /// [`Lorentz::with_lines`] has `RESTARTS`.
     pub restarts: Vec<Pose2>,
     /// When the restarts (so only with some) gave no trusted answer either, the best starts of
@@ -204,6 +205,13 @@ pub struct Lorentz {
     /// left out and the polish finishes the answer. Not in the thesis; `None` (the default)
     /// runs every pass, and [`Lorentz::with_lines`] has [`FIRST_PASS_ENOUGH`].
     pub first_pass_enough: Option<(f64, f64)>,
+    /// `first_pass_enough` for a dense scan that looks clean (the test of
+    /// `first_pass_thinning`, which it needs): few points far from both neighbours, as a real
+    /// log's scans and the twin's without outliers are, and a scan with 20 % outliers is not.
+    /// There the points that pull the estimate aside are few, and the narrower passes seldom
+    /// move it. Not in the thesis; `None` (the default) asks `first_pass_enough` of every
+    /// scan, and [`Lorentz::with_lines`] has [`CLEAN_PASS_ENOUGH`].
+    pub clean_pass_enough: Option<(f64, f64)>,
     /// End a σ pass when a search brings the estimate back to within `convergence` (or
     /// `early_convergence`) of where it was two searches before: the searches alternate
     /// between two sets of pairs, and the estimate between two poses, so no later search would
@@ -248,6 +256,14 @@ pub struct Lorentz {
     /// thesis; `None` (the default) runs every restart, and [`Lorentz::with_lines`] has
     /// [`RESTARTS_AGREE`].
     pub restarts_agree: Option<RestartsAgree>,
+    /// How much smaller a share of the current points than the untrusted first answer fits a
+    /// restart's trusted answer may fit and still replace it (and so may the wide schedule's,
+    /// which waits for the restarts). An answer that fits clearly fewer points than one the
+    /// same match found nearer the guess has slid to a look-alike place more often than the
+    /// first was wrong: the first stays, untrusted, and the caller falls back to odometry.
+    /// Not in the thesis; `None` (the default) keeps the trusted answer that fits most
+    /// however little, and [`Lorentz::with_lines`] has [`RESTART_SHORTFALL`].
+    pub restart_shortfall: Option<f64>,
     /// For dense scans (as `dense_sigmas_m`), in the first σ pass of every schedule but the
     /// wide one, when the current scan looks clean ([`Thinning`]: few points far from both
     /// neighbours, as outliers are): its first searches pair every second current point only,
@@ -327,6 +343,7 @@ impl Lorentz {
             first_spread: Some(FIRST_SPREAD),
             first_max_steps: Some(FIRST_STEPS),
             first_pass_enough: Some(FIRST_PASS_ENOUGH),
+            clean_pass_enough: Some(CLEAN_PASS_ENOUGH),
             stop_on_cycles: true,
             first_pass_surfaces: Some(FIRST_PASS_SURFACE_POINTS),
             early_convergence: Some(EARLY_CONVERGENCE),
@@ -334,6 +351,7 @@ impl Lorentz {
             first_match_convergence: Some(FIRST_MATCH_CONVERGENCE),
             merge_reach: Some(MERGE_REACH),
             restarts_agree: Some(RESTARTS_AGREE),
+            restart_shortfall: Some(RESTART_SHORTFALL),
             first_pass_thinning: Some(FIRST_PASS_THINNING),
             sparse_early_convergence: Some(SPARSE_EARLY_CONVERGENCE),
             sigmas_m: SPARSE_SIGMAS.to_vec(),
@@ -384,12 +402,14 @@ impl Default for Lorentz {
             first_spread: None,
             first_max_steps: None,
             first_pass_enough: None,
+            clean_pass_enough: None,
             stop_on_cycles: false,
             first_pass_surfaces: None,
             first_pass_convergence: None,
             first_match_convergence: None,
             merge_reach: None,
             restarts_agree: None,
+            restart_shortfall: None,
             first_pass_thinning: None,
             sparse_early_convergence: None,
             sparse_finish: None,
@@ -693,6 +713,14 @@ impl Lorentz {
         // The restarts and the coarse search's starts run one schedule: one that comes to where
         // an earlier one ended a pass takes its answer.
         let mut visits = Visits::default();
+        // With `restart_shortfall`, what a restart's answer (and the wide schedule's, kept
+        // above) must fit: no less than that below what the untrusted first answer fits.
+        let floor = self
+            .restart_shortfall
+            .map_or(f64::NEG_INFINITY, |shortfall| {
+                first.quality.inlier_share - shortfall
+            });
+        best = best.filter(|(_, share)| *share > floor);
         // With `restarts_agree`, for a first answer whose only fault is its overlap: how many
         // restarts in a row from the first came back to it. Enough, and the rescue ends.
         let agree = self
@@ -716,7 +744,7 @@ impl Lorentz {
             let came_back = back == tried
                 && agree.is_some_and(|agree| agree.came_back(&first.pose, &result.pose));
             back += usize::from(came_back);
-            keep(result, f64::NEG_INFINITY, &mut best);
+            keep(result, floor, &mut best);
         }
         // Still nothing: the coarse search's starts, whose answers must fit clearly more
         // points than the first (unless the restarts agreed with it).

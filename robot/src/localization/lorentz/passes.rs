@@ -188,8 +188,16 @@ impl Lorentz {
         // With `first_pass_enough` on a dense scan: the squared distance within which a pair
         // counts as close, the share of the current points that must be, and how many of the
         // last search's pairs were.
+        // Whether a dense scan looks clean (`first_pass_thinning`'s test), for the thinning and
+        // `clean_pass_enough`.
+        let clean = crowd.is_some()
+            && self
+                .first_pass_thinning
+                .is_some_and(|thinning| looks_clean(&current.xy, &thinning));
         let enough = self
-            .first_pass_enough
+            .clean_pass_enough
+            .filter(|_| clean)
+            .or(self.first_pass_enough)
             .filter(|_| crowd.is_some())
             .map(|(distance, share)| (distance * distance, share));
         let mut close = 0;
@@ -237,8 +245,7 @@ impl Lorentz {
             // the searches thinned so far.
             let mut thinning = self
                 .first_pass_thinning
-                .filter(|_| pass == 0 && crowd.is_some() && more_passes)
-                .filter(|thinning| looks_clean(&current.xy, thinning))
+                .filter(|_| pass == 0 && clean && more_passes)
                 .map(|thinning| thinning.searches);
             let mut thinned = 0;
             for _ in 0..self.convergence.max_iterations {
