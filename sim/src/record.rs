@@ -141,7 +141,57 @@ impl LocalisationRecord {
             ))
         })
     }
+
+    /// How far each trusted match's answer lies from the truth, metres and radians
+    /// ([`trusted_match_errors`]), the truth taken from `scans`.
+    pub fn trusted_match_errors<'a>(
+        &'a self,
+        scans: &'a [ScanRecord],
+    ) -> impl Iterator<Item = (f64, f64)> + 'a {
+        trusted_match_errors(&self.placed, move |stamp| {
+            scans
+                .binary_search_by_key(&stamp, |s| s.scan.stamp)
+                .ok()
+                .map(|i| scans[i].truth)
+        })
+    }
+
+    /// The trusted matches whose answer lies more than `metres` or `radians` from the truth
+    /// ([`trusted_match_errors`](Self::trusted_match_errors)): trusted, and wrong.
+    pub fn wrong_trusted(&self, scans: &[ScanRecord], (metres, radians): (f64, f64)) -> usize {
+        self.trusted_match_errors(scans)
+            .filter(|&(m, r)| m > metres || r > radians)
+            .count()
+    }
 }
+
+/// How far each trusted match of `placed` (in order, as a map builder placed them) lies from
+/// the truth, metres and radians: the motion it put between its reference scan and its scan
+/// (the estimate's: a trusted match sets it) against the true motion between them, `truth`
+/// giving the base's true pose at a stamp. A match whose scans have no truth is left out.
+pub fn trusted_match_errors<'a>(
+    placed: &'a [Placed],
+    truth: impl Fn(Stamp) -> Option<Pose2> + 'a,
+) -> impl Iterator<Item = (f64, f64)> + 'a {
+    let estimate = |stamp: Stamp| {
+        placed
+            .binary_search_by_key(&stamp, |p| p.stamp)
+            .ok()
+            .map(|i| placed[i].estimate)
+    };
+    placed.iter().filter(|p| p.trusted).filter_map(move |p| {
+        let reference = p.reference?;
+        let answered = estimate(reference)?.relative(&p.estimate);
+        let true_motion = truth(reference)?.relative(&truth(p.stamp)?);
+        let off = true_motion.relative(&answered);
+        Some((off.x.hypot(off.y), off.theta.abs()))
+    })
+}
+
+/// When a trusted match counts as wrong in a run of the twin
+/// ([`LocalisationRecord::wrong_trusted`]): 5 cm or 1° from the true motion, the line of
+/// success of `twin matchers` on the twin's pairs.
+pub const WRONG_MATCH: (f64, f64) = (0.05, 1.0 * std::f64::consts::PI / 180.0);
 
 /// How a navigating step (`goto`, `explore`) ended, against the truth.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -338,4 +388,70 @@ pub struct DecisionRecord {
     pub goal: Option<[f64; 2]>,
     /// The decision.
     pub decision: robot::control::Decision,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use robot::localization::MatchResult;
+
+    /// A scan placed at `estimate`, matched against the scan at `reference` (seconds) when given.
+    fn placed(t: u64, estimate: Pose2, reference: Option<u64>, trusted: bool) -> Placed {
+        Placed {
+            stamp: Stamp::from_millis(t * 1000),
+            estimate,
+            odometry: estimate,
+            matched: reference.map(|_| MatchResult::unmatched(Pose2::IDENTITY)),
+            reference: reference.map(|r| Stamp::from_millis(r * 1000)),
+            trusted,
+        }
+    }
+
+    #[test]
+    fn a_trusted_match_is_judged_by_the_motion_it_put_between_its_scans() {
+        // The truth: 1 m forward a scan, turning 10° at the second.
+        let truth = [
+            Pose2::new(0.0, 0.0, 0.0),
+            Pose2::new(1.0, 0.0, 0.0),
+            Pose2::new(2.0, 0.0, 10f64.to_radians()),
+            Pose2::new(
+                2.0 + 10f64.to_radians().cos(),
+                10f64.to_radians().sin(),
+                0.2,
+            ),
+        ];
+        // The estimate starts 0.5 m and 5° off (an error carried over is no match's fault),
+        // the second match answers 0.2 m short, the third is wrong but not trusted (odometry
+        // placed it), and the last trusted one is right again from there.
+        let origin = Pose2::new(0.5, 0.0, 5f64.to_radians());
+        let at = |p: Pose2| origin.compose(&p);
+        let short = at(truth[1]).compose(
+            &truth[1]
+                .relative(&truth[2])
+                .compose(&Pose2::new(-0.2, 0.0, 0.0)),
+        );
+        let wrong = short.compose(&Pose2::new(3.0, 0.0, 1.0));
+        let placed = vec![
+            placed(0, at(truth[0]), None, false),
+            placed(1, at(truth[1]), Some(0), true),
+            placed(2, short, Some(1), true),
+            placed(3, wrong, Some(2), false),
+        ];
+        let truth_at = |stamp: Stamp| truth.get(stamp.secs_f64().round() as usize).copied();
+        let errors: Vec<(f64, f64)> = trusted_match_errors(&placed, truth_at).collect();
+        assert_eq!(errors.len(), 2, "{errors:?}");
+        assert!(errors[0].0 < 1e-9 && errors[0].1 < 1e-9, "{errors:?}");
+        assert!(
+            (errors[1].0 - 0.2).abs() < 1e-9 && errors[1].1 < 1e-9,
+            "{errors:?}"
+        );
+        let wrong = errors
+            .iter()
+            .filter(|&&(m, r)| m > WRONG_MATCH.0 || r > WRONG_MATCH.1)
+            .count();
+        assert_eq!(wrong, 1);
+        // A scan without truth leaves its match out.
+        let none = |_: Stamp| None;
+        assert_eq!(trusted_match_errors(&placed, none).count(), 0);
+    }
 }

@@ -70,6 +70,8 @@ pub struct Placed {
     pub odometry: Pose2,
     /// The match against the reference (`None` for the first scan).
     pub matched: Option<MatchResult>,
+    /// The stamp of the reference scan it was matched against (`None` for the first scan).
+    pub reference: Option<Stamp>,
     /// Whether the match was used (converged, enough correspondences, a correction within the
     /// bounds) rather than the odometry guess.
     pub trusted: bool,
@@ -111,6 +113,8 @@ impl MatchStats {
 #[derive(Debug)]
 struct Key {
     reference: Reference,
+    /// The reference scan's stamp.
+    stamp: Stamp,
     estimate: Pose2,
     /// The reference scan's laser pose on the base.
     mount: Pose2,
@@ -257,6 +261,7 @@ impl MapBuilder {
     }
 
     fn place(&mut self, stamp: Stamp, points: ScanPoints, mount: Pose2, odometry: Pose2) {
+        let reference = self.key.as_ref().map(|key| key.stamp);
         let (estimate, matched, trusted) = match (&self.key, self.placed.last()) {
             (Some(key), Some(last)) => {
                 // Dead-reckon from the last placed scan, then express it in the reference: the
@@ -294,6 +299,7 @@ impl MapBuilder {
         if new_key && !points.is_empty() {
             self.key = Some(Key {
                 reference: Reference::new(points),
+                stamp,
                 estimate,
                 mount,
             });
@@ -302,6 +308,7 @@ impl MapBuilder {
             stamp,
             estimate,
             odometry,
+            reference: matched.as_ref().and(reference),
             matched,
             trusted,
         });

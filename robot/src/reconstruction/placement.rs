@@ -49,6 +49,7 @@ mod tests {
             estimate,
             odometry,
             matched: None,
+            reference: None,
             trusted: false,
         }
     }

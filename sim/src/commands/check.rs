@@ -8,7 +8,7 @@
 use crate::config::Scenario;
 use crate::config::checks::{Check, CheckKind, ModelPlacement};
 use crate::record::Placement;
-use crate::record::RunRecord;
+use crate::record::{RunRecord, WRONG_MATCH};
 use crate::world::PointKind;
 use crate::world::WorldMap;
 use core::fmt;
@@ -255,6 +255,25 @@ fn evaluate_one(
                 .sum();
             let share = lost as f64 / total.max(1) as f64;
             single(share, format!("{share:.4} ({lost} of {total} readings)"))
+        }
+        CheckKind::WrongTrustedMatches => {
+            let Some(loc) = &record.localisation else {
+                return outcome("no matches".into(), "a [localisation] table".into(), false);
+            };
+            let errors: Vec<(f64, f64)> = loc.trusted_match_errors(&record.scans).collect();
+            let wrong = loc.wrong_trusted(&record.scans, WRONG_MATCH);
+            let (worst_m, worst_rad) = errors
+                .iter()
+                .fold((0.0f64, 0.0f64), |(m, r), &(em, er)| (m.max(em), r.max(er)));
+            single(
+                wrong as f64,
+                format!(
+                    "{wrong} of {} trusted (the worst {:.3} m, {:.2}° from the true motion)",
+                    errors.len(),
+                    worst_m,
+                    worst_rad.to_degrees()
+                ),
+            )
         }
         CheckKind::MapQuality => {
             let Some(loc) = &record.localisation else {

@@ -244,6 +244,7 @@ pub fn read_run_folder(dir: &Path) -> Result<RunFolder, FolderError> {
                     estimate,
                     odometry: odometry(line),
                     matched: None,
+                    reference: None,
                     trusted: true,
                 })
             })

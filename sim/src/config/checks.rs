@@ -28,6 +28,9 @@ pub enum CheckKind {
     NoReturnShare,
     /// Share of the estimate's map points within 5 cm of a true surface.
     MapQuality,
+    /// Scan matches the localisation trusted that lie more than 5 cm or 1° from the true
+    /// motion between their scans: a `converged` flag that lied.
+    WrongTrustedMatches,
     /// Largest error (m) of the listed sonar transducers' last echoes against the true distance
     /// along their axes.
     SonarError {
@@ -76,7 +79,7 @@ pub enum ModelPlacement {
 
 impl CheckKind {
     /// The names accepted in `kind = "…"`.
-    pub const NAMES: [&'static str; 20] = [
+    pub const NAMES: [&'static str; 21] = [
         "final_estimate_error",
         "rms_estimate_error",
         "odometry_drift",
@@ -85,6 +88,7 @@ impl CheckKind {
         "outlier_share",
         "no_return_share",
         "map_quality",
+        "wrong_trusted_matches",
         "sonar_error",
         "distance_travelled",
         "point_error",
@@ -110,6 +114,7 @@ impl CheckKind {
             CheckKind::OutlierShare => "outlier_share",
             CheckKind::NoReturnShare => "no_return_share",
             CheckKind::MapQuality => "map_quality",
+            CheckKind::WrongTrustedMatches => "wrong_trusted_matches",
             CheckKind::SonarError { .. } => "sonar_error",
             CheckKind::DistanceTravelled => "distance_travelled",
             CheckKind::PointError(_) => "point_error",
@@ -153,7 +158,10 @@ impl CheckKind {
             | CheckKind::MinClearance => " m",
             CheckKind::PhantomArea(_) => " m²",
             CheckKind::Duration => " s",
-            CheckKind::Collisions | CheckKind::Scans | CheckKind::NavigationFailures => "",
+            CheckKind::Collisions
+            | CheckKind::Scans
+            | CheckKind::NavigationFailures
+            | CheckKind::WrongTrustedMatches => "",
             CheckKind::OutlierShare
             | CheckKind::NoReturnShare
             | CheckKind::MapQuality
@@ -257,6 +265,7 @@ pub(super) fn parse_checks(
             "outlier_share" => CheckKind::OutlierShare,
             "no_return_share" => CheckKind::NoReturnShare,
             "map_quality" => CheckKind::MapQuality,
+            "wrong_trusted_matches" => CheckKind::WrongTrustedMatches,
             "distance_travelled" => CheckKind::DistanceTravelled,
             "goal_error" => CheckKind::GoalError,
             "navigation_failures" => CheckKind::NavigationFailures,
@@ -289,9 +298,10 @@ pub(super) fn parse_checks(
             | CheckKind::SeamError(_)
             | CheckKind::GoalError
             | CheckKind::MinClearance => (true, false, false, false, false, false),
-            CheckKind::Collisions | CheckKind::Scans | CheckKind::NavigationFailures => {
-                (false, false, true, false, false, false)
-            }
+            CheckKind::Collisions
+            | CheckKind::Scans
+            | CheckKind::NavigationFailures
+            | CheckKind::WrongTrustedMatches => (false, false, true, false, false, false),
             CheckKind::OutlierShare
             | CheckKind::NoReturnShare
             | CheckKind::MapQuality
@@ -379,7 +389,10 @@ pub(super) fn parse_checks(
             _ if kind.model() == Some(ModelPlacement::Estimate) && !localises => {
                 Some("a [localisation] table (the model placed by the estimate)")
             }
-            CheckKind::FinalEstimateError | CheckKind::RmsEstimateError | CheckKind::MapQuality
+            CheckKind::FinalEstimateError
+            | CheckKind::RmsEstimateError
+            | CheckKind::MapQuality
+            | CheckKind::WrongTrustedMatches
                 if !localises =>
             {
                 Some("a [localisation] table")

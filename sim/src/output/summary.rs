@@ -1,6 +1,6 @@
 //! `summary.json`: the figures of a run.
 
-use crate::record::{LocalisationRecord, RunRecord};
+use crate::record::{LocalisationRecord, RunRecord, WRONG_MATCH};
 use robot::localization::MatchStats;
 use serde::Serialize;
 use std::path::Path;
@@ -65,6 +65,12 @@ pub struct LocalisationSummary {
     /// Matches made, trusted and converged, and the mean iterations.
     #[serde(flatten)]
     pub stats: MatchStats,
+    /// Trusted matches more than 5 cm or 1° from the true motion ([`WRONG_MATCH`]).
+    pub wrong_trusted: usize,
+    /// The largest distance of a trusted match's answer from the true motion, metres …
+    pub worst_trusted_error_m: f64,
+    /// … and the largest heading difference, degrees (each over every trusted match).
+    pub worst_trusted_error_deg: f64,
     /// Wall-clock milliseconds spent localising per scan (machine-dependent).
     pub wall_ms_per_scan: f64,
 }
@@ -97,6 +103,9 @@ impl LocalisationSummary {
             .sum::<f64>()
             / n)
             .sqrt();
+        let (worst_m, worst_rad) = loc
+            .trusted_match_errors(&record.scans)
+            .fold((0.0f64, 0.0f64), |(m, r), (em, er)| (m.max(em), r.max(er)));
         LocalisationSummary {
             matcher: loc.matcher.to_string(),
             final_error_m,
@@ -105,6 +114,9 @@ impl LocalisationSummary {
             rms_error_deg,
             odometry_rms_error_m,
             stats: MatchStats::of(&loc.placed),
+            wrong_trusted: loc.wrong_trusted(&record.scans, WRONG_MATCH),
+            worst_trusted_error_m: worst_m,
+            worst_trusted_error_deg: worst_rad.to_degrees(),
             wall_ms_per_scan: loc.wall_seconds * 1e3 / n,
         }
     }
