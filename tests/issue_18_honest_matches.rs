@@ -1389,6 +1389,25 @@ fn point_to_line_residuals_take_fewer_searches() {
     }
 }
 
+/// A pair saved under `tests/data/` as JSON: its reference and current scans, the guess and
+/// the true pose.
+fn saved_pair(name: &str) -> (RangeScan, RangeScan, Pose2, Pose2) {
+    let text = std::fs::read_to_string(repo().join("tests/data").join(name)).unwrap();
+    let pair: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let scan = |k: &str| -> RangeScan { serde_json::from_value(pair[k].clone()).unwrap() };
+    let pose = |k: &str| {
+        let v: Vec<f64> = serde_json::from_value(pair[k].clone()).unwrap();
+        Pose2::new(v[0], v[1], v[2])
+    };
+    (scan("ref"), scan("cur"), pose("guess"), pose("truth"))
+}
+
+/// How far an answer lies from `truth`: metres and degrees.
+fn off_truth(truth: &Pose2, r: &robot::localization::MatchResult) -> (f64, f64) {
+    let d = truth.relative(&r.pose);
+    (d.x.hypot(d.y), d.theta.abs().to_degrees())
+}
+
 /// A pair of the goto-lab study (`tests/data/pair-restart-slides.json`: a 0.6 m advance past
 /// black and glass, where the current scan sees a table 0.3 m away that the reference saw
 /// through): no start near the guess is trusted, and point-to-line residuals let a restart
@@ -1402,19 +1421,8 @@ fn point_to_line_residuals_take_fewer_searches() {
 #[test]
 fn a_restart_is_not_free_to_slide() {
     use robot::localization::{Lorentz, MatchResult};
-    let text = std::fs::read_to_string(repo().join("tests/data/pair-restart-slides.json")).unwrap();
-    let pair: serde_json::Value = serde_json::from_str(&text).unwrap();
-    let scan = |k: &str| -> RangeScan { serde_json::from_value(pair[k].clone()).unwrap() };
-    let pose = |k: &str| {
-        let v: Vec<f64> = serde_json::from_value(pair[k].clone()).unwrap();
-        Pose2::new(v[0], v[1], v[2])
-    };
-    let (reference, current, guess, truth) =
-        (scan("ref"), scan("cur"), pose("guess"), pose("truth"));
-    let off = |r: &MatchResult| {
-        let d = truth.relative(&r.pose);
-        (d.x.hypot(d.y), d.theta.abs().to_degrees())
-    };
+    let (reference, current, guess, truth) = saved_pair("pair-restart-slides.json");
+    let off = |r: &MatchResult| off_truth(&truth, r);
     let answer = Lorentz::with_lines().match_scans(&reference, &current, guess);
     let (metres, degrees) = off(&answer);
     assert!(
@@ -1458,20 +1466,8 @@ fn a_restart_is_not_free_to_slide() {
 #[test]
 fn a_restart_that_fits_fewer_points_does_not_replace_the_first() {
     use robot::localization::{Lorentz, MatchResult};
-    let text =
-        std::fs::read_to_string(repo().join("tests/data/pair-restart-shortfall.json")).unwrap();
-    let pair: serde_json::Value = serde_json::from_str(&text).unwrap();
-    let scan = |k: &str| -> RangeScan { serde_json::from_value(pair[k].clone()).unwrap() };
-    let pose = |k: &str| {
-        let v: Vec<f64> = serde_json::from_value(pair[k].clone()).unwrap();
-        Pose2::new(v[0], v[1], v[2])
-    };
-    let (reference, current, guess, truth) =
-        (scan("ref"), scan("cur"), pose("guess"), pose("truth"));
-    let off = |r: &MatchResult| {
-        let d = truth.relative(&r.pose);
-        (d.x.hypot(d.y), d.theta.abs().to_degrees())
-    };
+    let (reference, current, guess, truth) = saved_pair("pair-restart-shortfall.json");
+    let off = |r: &MatchResult| off_truth(&truth, r);
     let answer = Lorentz::with_lines().match_scans(&reference, &current, guess);
     let (metres, degrees) = off(&answer);
     assert!(

@@ -158,10 +158,39 @@ impl LocalisationRecord {
 
     /// The trusted matches whose answer lies more than `metres` or `radians` from the truth
     /// ([`trusted_match_errors`](Self::trusted_match_errors)): trusted, and wrong.
-    pub fn wrong_trusted(&self, scans: &[ScanRecord], (metres, radians): (f64, f64)) -> usize {
-        self.trusted_match_errors(scans)
-            .filter(|&(m, r)| m > metres || r > radians)
-            .count()
+    pub fn wrong_trusted(&self, scans: &[ScanRecord], tolerance: (f64, f64)) -> usize {
+        self.judge_trusted(scans, tolerance).wrong
+    }
+
+    /// Every trusted match judged against the truth in `scans`, wrong beyond `tolerance`
+    /// (metres, radians).
+    pub fn judge_trusted(&self, scans: &[ScanRecord], tolerance: (f64, f64)) -> TrustedJudged {
+        TrustedJudged::of(self.trusted_match_errors(scans), tolerance)
+    }
+}
+
+/// A run's trusted matches against the truth: how many, how many wrong, and the worst.
+#[derive(Copy, Clone, Debug, Default, PartialEq)]
+pub struct TrustedJudged {
+    /// Trusted matches whose scans have a truth.
+    pub trusted: usize,
+    /// Those more than the tolerance from the true motion.
+    pub wrong: usize,
+    /// The largest distance of an answer from the true motion, metres (0 with none) …
+    pub worst_m: f64,
+    /// … and the largest heading difference, radians (each over every trusted match).
+    pub worst_rad: f64,
+}
+
+impl TrustedJudged {
+    /// The judgement of `errors` (metres, radians), wrong beyond `(metres, radians)`.
+    pub fn of(errors: impl Iterator<Item = (f64, f64)>, (metres, radians): (f64, f64)) -> Self {
+        errors.fold(TrustedJudged::default(), |j, (m, r)| TrustedJudged {
+            trusted: j.trusted + 1,
+            wrong: j.wrong + usize::from(m > metres || r > radians),
+            worst_m: j.worst_m.max(m),
+            worst_rad: j.worst_rad.max(r),
+        })
     }
 }
 
@@ -445,10 +474,7 @@ mod tests {
             (errors[1].0 - 0.2).abs() < 1e-9 && errors[1].1 < 1e-9,
             "{errors:?}"
         );
-        let wrong = errors
-            .iter()
-            .filter(|&&(m, r)| m > WRONG_MATCH.0 || r > WRONG_MATCH.1)
-            .count();
+        let wrong = TrustedJudged::of(errors.iter().copied(), WRONG_MATCH).wrong;
         assert_eq!(wrong, 1);
         // A scan without truth leaves its match out.
         let none = |_: Stamp| None;

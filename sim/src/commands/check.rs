@@ -260,18 +260,15 @@ fn evaluate_one(
             let Some(loc) = &record.localisation else {
                 return outcome("no matches".into(), "a [localisation] table".into(), false);
             };
-            let errors: Vec<(f64, f64)> = loc.trusted_match_errors(&record.scans).collect();
-            let wrong = loc.wrong_trusted(&record.scans, WRONG_MATCH);
-            let (worst_m, worst_rad) = errors
-                .iter()
-                .fold((0.0f64, 0.0f64), |(m, r), &(em, er)| (m.max(em), r.max(er)));
+            let judged = loc.judge_trusted(&record.scans, WRONG_MATCH);
             single(
-                wrong as f64,
+                judged.wrong as f64,
                 format!(
-                    "{wrong} of {} trusted (the worst {:.3} m, {:.2}° from the true motion)",
-                    errors.len(),
-                    worst_m,
-                    worst_rad.to_degrees()
+                    "{} of {} trusted (the worst {:.3} m, {:.2}° from the true motion)",
+                    judged.wrong,
+                    judged.trusted,
+                    judged.worst_m,
+                    judged.worst_rad.to_degrees()
                 ),
             )
         }

@@ -103,9 +103,7 @@ impl LocalisationSummary {
             .sum::<f64>()
             / n)
             .sqrt();
-        let (worst_m, worst_rad) = loc
-            .trusted_match_errors(&record.scans)
-            .fold((0.0f64, 0.0f64), |(m, r), (em, er)| (m.max(em), r.max(er)));
+        let judged = loc.judge_trusted(&record.scans, WRONG_MATCH);
         LocalisationSummary {
             matcher: loc.matcher.to_string(),
             final_error_m,
@@ -114,9 +112,9 @@ impl LocalisationSummary {
             rms_error_deg,
             odometry_rms_error_m,
             stats: MatchStats::of(&loc.placed),
-            wrong_trusted: loc.wrong_trusted(&record.scans, WRONG_MATCH),
-            worst_trusted_error_m: worst_m,
-            worst_trusted_error_deg: worst_rad.to_degrees(),
+            wrong_trusted: judged.wrong,
+            worst_trusted_error_m: judged.worst_m,
+            worst_trusted_error_deg: judged.worst_rad.to_degrees(),
             wall_ms_per_scan: loc.wall_seconds * 1e3 / n,
         }
     }

@@ -146,8 +146,8 @@ pub struct Lorentz {
     pub sparse_loose_wide: bool,
     /// Where to start again, relative to the guess, when the answer is still not trusted
     /// ([`TrustRule`]) after `wide_sigmas_m`: the trusted answer with the most inliers is
-    /// kept (if it fits nearly as many as the first, `restart_shortfall`). Not in the thesis; empty (the default) leaves it out, and
-    /// [`Lorentz::with_lines`] has `RESTARTS`.
+    /// kept (if it fits nearly as many as the first, `restart_shortfall`). Not in the thesis;
+    /// empty (the default) leaves it out, and [`Lorentz::with_lines`] has `RESTARTS`.
     pub restarts: Vec<Pose2>,
     /// When the restarts (so only with some) gave no trusted answer either, the best starts of
     /// a coarse correlative search over this window around the guess
