@@ -562,6 +562,81 @@ fn a_corrected_log_of_ones_own_adds_two_rows() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// `twin matchers --world PATH` adds four synthetic rows in that world alone (the LMS at 0.5°
+/// and 1°, each at 0 % and 20 % outliers), named after the file, from pairs a short drive
+/// apart; here the L-corridor of Aparicio 2011, whose ends are open. The standard rows' pairs
+/// stay as they were, and a world file that is not there is refused by name.
+#[test]
+fn a_world_of_ones_own_adds_four_synthetic_rows() {
+    let sets =
+        matchers::extra_world_sets(&repo(), &repo().join("worlds/l-corridor.toml"), 20, 3).unwrap();
+    let names: Vec<&str> = sets.iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "synthetic, l-corridor, 0 %",
+            "synthetic, l-corridor, 20 %",
+            "synthetic 1°, l-corridor, 0 %",
+            "synthetic 1°, l-corridor, 20 %",
+        ]
+    );
+    for set in &sets {
+        assert_eq!(set.cases.len(), 20);
+        for case in &set.cases {
+            // A short drive: at most 30 cm and 20° (the laser sits ahead of the base's centre).
+            assert!(case.truth.x.hypot(case.truth.y) < 0.45, "{:?}", case.truth);
+            assert!(case.truth.theta.abs() <= 20f64.to_radians() + 1e-9);
+            // Both scans see the corridor's walls.
+            assert!(case.reference.points().len() > 50 && case.current.points().len() > 50);
+        }
+    }
+    let out = tempfile_dir("twin-matchers-world");
+    let run = |args: &[&str], dir: &std::path::Path| {
+        let run = Command::new(env!("CARGO_BIN_EXE_twin"))
+            .args([
+                "matchers",
+                "--pairs",
+                "6",
+                "--quiet",
+                "--matchers",
+                "lorentz-lines",
+            ])
+            .args(args)
+            .arg("--out")
+            .arg(dir)
+            .current_dir(repo())
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr).into_owned();
+        (
+            run.status.success(),
+            String::from_utf8(run.stdout).unwrap(),
+            stderr,
+        )
+    };
+    let (ok, table, stderr) = run(&["--world", "worlds/l-corridor.toml"], &out.join("with"));
+    assert!(ok, "{stderr}");
+    for row in [
+        "synthetic, l-corridor, 20 %",
+        "synthetic 1°, l-corridor, 0 %",
+    ] {
+        assert!(
+            table.contains(&format!("| {row} (6) | lorentz-lines |")),
+            "{table}"
+        );
+    }
+    let (ok, _, stderr) = run(&[], &out.join("without"));
+    assert!(ok, "{stderr}");
+    let csv = |dir: &str| std::fs::read_to_string(out.join(dir).join("pairs.csv")).unwrap();
+    let (with, without) = (csv("with"), csv("without"));
+    assert!(with.starts_with(&without), "the standard rows changed");
+    assert_eq!(with.lines().count(), without.lines().count() + 24);
+    let (ok, _, stderr) = run(&["--world", "worlds/no-such-world.toml"], &out.join("none"));
+    assert!(!ok);
+    assert!(stderr.contains("no-such-world.toml"), "{stderr}");
+    let _ = std::fs::remove_dir_all(&out);
+}
+
 /// `twin matchers --raw-log PATH` adds a row of a log without a reference (here the MIT log's
 /// first 30 scans, whose poses are raw odometry) in a table of its own, with what needs no
 /// truth: the flagged share, the time and the closure, which for `lorentz-lines` and `pl-icp`

@@ -7,13 +7,17 @@
 //! cargo run --release --example reach              # band 2 cm (the laser's ±2 cm), margin 0.05
 //! cargo run --release --example reach -- 0.05      # the trust rule's 5 cm band
 //! cargo run --release --example reach -- 0.02 0.1  # a margin of 10 in 100 points
+//! # A world's synthetic pairs instead (the row `twin matchers --world` adds at 0.5° and 0 %,
+//! # seed 1, 300 pairs), judged against the twin's exact truth with the synthetic rows'
+//! # tolerance of 5 cm and 1°:
+//! cargo run --release --example reach -- 0.02 0.05 worlds/l-corridor.toml
 //! ```
 //!
 //! About a minute and a half on two cores.
 
 use rayon::prelude::*;
 use sim::commands::matchers::reach::{Judge, Reach};
-use sim::commands::matchers::{GuessError, log_set};
+use sim::commands::matchers::{CaseSet, GuessError, extra_world_sets, log_set};
 use std::path::Path;
 
 fn main() {
@@ -56,9 +60,32 @@ fn main() {
         judge.band_m * 1e3,
         judge.margin
     );
-    for name in ["belgioioso", "freiburg-101", "edmonton"] {
-        let log = Path::new("tests/data/corrected").join(format!("{name}-corrected.log.gz"));
-        let set = log_set(name, &log, 300, error, 1).expect("the bundled logs load");
+    // With a world file: its synthetic row at 0.5° and 0 %, judged at its own tolerance.
+    let sets: Vec<(String, CaseSet, Judge)> = match std::env::args().nth(3) {
+        Some(world) => {
+            let [set, ..] = extra_world_sets(Path::new("."), Path::new(&world), 300, 1)
+                .unwrap_or_else(|e| {
+                    eprintln!("reach: {e}");
+                    std::process::exit(2)
+                });
+            let judge = Judge {
+                tolerance_m: set.tolerance_m,
+                tolerance_rad: set.tolerance_rad,
+                ..judge
+            };
+            vec![(set.name.clone(), set, judge)]
+        }
+        None => ["belgioioso", "freiburg-101", "edmonton"]
+            .into_iter()
+            .map(|name| {
+                let log =
+                    Path::new("tests/data/corrected").join(format!("{name}-corrected.log.gz"));
+                let set = log_set(name, &log, 300, error, 1).expect("the bundled logs load");
+                (name.to_string(), set, judge)
+            })
+            .collect(),
+    };
+    for (name, set, judge) in sets {
         let judged: Vec<_> = set.cases.par_iter().map(|c| judge.judge(c)).collect();
         let mut out = Vec::new();
         let mut undecided = 0;
@@ -72,7 +99,7 @@ fn main() {
             };
             let (i, o) = (off(&j.inside.pose), off(&j.outside.pose));
             println!(
-                "{name} pair {k}: {:?}; of {} points, {} at the log's pose, {} inside ({:.0} mm, {:.2}°), {} outside ({:.0} mm, {:.2}°)",
+                "{name} pair {k}: {:?}; of {} points, {} at the pose given as truth, {} inside ({:.0} mm, {:.2}°), {} outside ({:.0} mm, {:.2}°)",
                 j.reach,
                 j.points,
                 j.at_truth,

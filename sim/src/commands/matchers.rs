@@ -759,6 +759,43 @@ pub fn extra_log_sets(path: &Path, n: usize, seed: u64) -> Result<[CaseSet; 2], 
     Ok([small, large])
 }
 
+/// The four synthetic rows of a world given with `--world`, in it alone: the robot's LMS at
+/// 0.5° and in its 1° mode ([`SPARSE_BEAMS`]), each at 0 % and 20 % outliers, from the same
+/// guesses as the standard synthetic rows (`synthetic, NAME, 0 %` and so on; NAME is the file's
+/// name without `.toml`). Geometry no constant was chosen on, to hold the matchers out on.
+pub fn extra_world_sets(
+    root: &Path,
+    path: &Path,
+    n: usize,
+    seed: u64,
+) -> Result<[CaseSet; 4], CommandError> {
+    let world = [WorldDescription::load(path)?];
+    let name = path
+        .file_stem()
+        .map(|f| f.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let robot = RobotDescription::load(root.join("scenarios/robots/pioneer-3dx.toml"))?;
+    let mut sparse = robot.clone();
+    sparse.laser.beams = SPARSE_BEAMS;
+    let set = |laser: &str, robot: &RobotDescription, rate: f64, percent: u32| {
+        synthetic_set(
+            &format!("synthetic{laser}, {name}, {percent} %"),
+            &world,
+            robot,
+            rate,
+            n,
+            SMALL_GUESS,
+            seed,
+        )
+    };
+    Ok([
+        set("", &robot, 0.0, 0)?,
+        set("", &robot, 0.2, 20)?,
+        set(" 1°", &sparse, 0.0, 0)?,
+        set(" 1°", &sparse, 0.2, 20)?,
+    ])
+}
+
 /// The row of a log without a reference given with `--raw-log` (`raw, NAME`): its first `n`
 /// consecutive pairs and their triangles, each guess the log's own relative pose (its
 /// odometry), as a map builder would start. Its `truth` is that guess too, so of its row only
@@ -909,6 +946,11 @@ pub struct MatchersArgs {
     /// The standard rows stay as they are.
     #[arg(long, value_name = "PATH")]
     pub log: Vec<PathBuf>,
+    /// Also four synthetic rows in this world alone (a world file, repeatable; say
+    /// `worlds/l-corridor.toml`): the LMS at 0.5° and 1°, each at 0 % and 20 % outliers, from
+    /// the standard rows' guesses. The standard rows stay as they are.
+    #[arg(long, value_name = "PATH")]
+    pub world: Vec<PathBuf>,
     /// Also a row of this log without a reference (repeatable), such as a CARMEN log whose
     /// poses are raw odometry (`tests/data/mit-csail.clf`): its consecutive pairs from the
     /// odometry's guesses, in a table of its own with what needs no truth: the flagged share,
@@ -1043,6 +1085,9 @@ pub fn main(args: MatchersArgs) -> Result<(), CommandError> {
         let mut sets = standard_sets(&args.root, args.pairs, seed)?;
         for path in &args.log {
             sets.extend(extra_log_sets(path, args.pairs, seed)?);
+        }
+        for path in &args.world {
+            sets.extend(extra_world_sets(&args.root, path, args.pairs, seed)?);
         }
         Ok(sets)
     };

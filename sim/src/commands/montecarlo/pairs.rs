@@ -29,6 +29,10 @@ pub struct PairMaker {
     map: WorldMap,
     laser: LaserModel,
     bounds: ([f64; 2], [f64; 2]),
+    /// On how many of the four sides walls must surround a pose for it to be inside: as many
+    /// as surround the world's start (four in a closed building; three in a corridor whose
+    /// ends are open, as the L-corridor's of Aparicio 2011).
+    sides: usize,
 }
 
 impl PairMaker {
@@ -40,10 +44,13 @@ impl PairMaker {
             robot.laser.sigma_m.get(),
             outliers,
         );
+        let map = WorldMap::new(world);
+        let sides = walled_sides(&map, [world.start.x, world.start.y]).max(1);
         PairMaker {
-            map: WorldMap::new(world),
+            map,
             laser,
             bounds: world.bounds(),
+            sides,
         }
     }
 
@@ -68,11 +75,10 @@ impl PairMaker {
         }
     }
 
-    /// Whether walls surround `point` on all four sides (it is inside the building).
+    /// Whether walls surround `point` on as many sides as they surround the world's start: on
+    /// all four in a closed building (it is inside the building).
     pub fn enclosed(&self, point: [f64; 2]) -> bool {
-        [[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]]
-            .iter()
-            .all(|&dir| self.map.cast_level(point, 0.3, dir, 100.0).is_some())
+        walled_sides(&self.map, point) >= self.sides
     }
 
     /// A random base pose inside the building at least `clearance` metres from every wall, any
@@ -92,5 +98,48 @@ impl PairMaker {
         Err(format!(
             "no start pose inside the building {clearance} m from every wall in {MAX_DRAWS} random draws: lower the study's clearance_m"
         ))
+    }
+}
+
+/// On how many of the four sides (along ±x and ±y) a wall lies within 100 m of `point`.
+fn walled_sides(map: &WorldMap, point: [f64; 2]) -> usize {
+    [[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]]
+        .iter()
+        .filter(|&&dir| map.cast_level(point, 0.3, dir, 100.0).is_some())
+        .count()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    fn maker(world: &str) -> PairMaker {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let world = WorldDescription::load(root.join("worlds").join(world)).unwrap();
+        let robot = RobotDescription::load(root.join("scenarios/robots/pioneer-3dx.toml")).unwrap();
+        PairMaker::new(&world, &robot, Outliers::NONE)
+    }
+
+    /// Inside is as walled as the world's start: all four sides in the closed lab, three in
+    /// the L-corridor, whose ends are open. A pose in either leg of the L is inside, one in
+    /// the open square the L bends around is not, nor is one beyond the lab's walls; and
+    /// start poses can be drawn in both.
+    #[test]
+    fn inside_is_as_walled_as_the_start() {
+        let corridor = maker("l-corridor.toml");
+        assert!(corridor.enclosed([0.6, 0.0]));
+        assert!(corridor.enclosed([6.0, 4.0]));
+        assert!(!corridor.enclosed([3.0, 3.0]));
+        let lab = maker("lab.toml");
+        assert_eq!(lab.sides, 4);
+        let ([x0, y0], _) = lab.bounds;
+        assert!(!lab.enclosed([x0 - 1.0, y0 - 1.0]));
+        let mut rng = crate::rng::stream(7, "pairs test");
+        for maker in [&corridor, &lab] {
+            let pose = maker.free_pose(0.4, &mut rng).unwrap();
+            assert!(maker.enclosed([pose.x, pose.y]));
+            assert!(maker.map.clearance([pose.x, pose.y]) > 0.4);
+        }
     }
 }
