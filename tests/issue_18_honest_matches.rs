@@ -637,6 +637,35 @@ fn a_world_of_ones_own_adds_four_synthetic_rows() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// Pair 19 of the L-corridor's row (seed 1, `twin matchers --world worlds/l-corridor.toml
+/// --show "l-corridor, 0 %/19"`): the current scan sees one wall of the corridor, and the
+/// scans fit a pose 13 cm along it as well as the truth (`cargo run --example reach -- 0.02
+/// 0.05 worlds/l-corridor.toml`: undecided). `lorentz-lines` answers 10 cm along the wall
+/// fitting every point, and the rule as it stood trusted it, its σ along the wall a few
+/// millimetres from the chords' noisy normals. Moved 10 cm either way along the wall the answer
+/// fits as many points: not held, not trusted. The same holds at the truth: nothing in these
+/// scans says where along the wall the robot was.
+#[test]
+fn an_answer_along_a_corridor_the_scans_leave_free_is_not_trusted() {
+    use robot::localization::{Lorentz, MatchQuality, Reference, ScanMatcher, TrustRule};
+    let sets =
+        matchers::extra_world_sets(&repo(), &repo().join("worlds/l-corridor.toml"), 20, 1).unwrap();
+    let case = &sets[0].cases[19];
+    let reference = Reference::new(case.reference.points());
+    let current = case.current.points();
+    let answer = Lorentz::with_lines().align(&reference, &current, case.guess);
+    let off = case.truth.relative(&answer.pose);
+    assert!(off.x.hypot(off.y) > 0.05, "{off:?}");
+    let rule = TrustRule::default();
+    let q = answer.quality;
+    assert!(q.spread < rule.hold_below_spread, "{q:?}");
+    assert!(q.sigma[0].max(q.sigma[1]) < rule.max_sigma_m, "{q:?}");
+    assert!(rule.trusts(&MatchQuality { held: true, ..q }), "{q:?}");
+    assert!(!q.held && !answer.converged, "{q:?}");
+    let at_truth = rule.assess(&reference, &current.xy, &case.truth);
+    assert!(!rule.holds(&reference, &current.xy, &case.truth, &at_truth));
+}
+
 /// `twin matchers --raw-log PATH` adds a row of a log without a reference (here the MIT log's
 /// first 30 scans, whose poses are raw odometry) in a table of its own, with what needs no
 /// truth: the flagged share, the time and the closure, which for `lorentz-lines` and `pl-icp`
@@ -786,7 +815,9 @@ fn restarts_rescue_large_guesses() {
 /// along it and still be trusted. A line-assisted Lorentzian that checks a trusted answer more
 /// than `FAR_SLIDE_M` from the guess against the coarse search's best start trusts fewer such
 /// answers, loses no right one, and changes no answer that stayed near its guess; over four
-/// seeds (each has the slide on the corridor's pair 8 without the check).
+/// seeds (each has the slide on the corridor's pair 8 without the check). Trusted as the rule
+/// stood when the check came: without asking whether the scans hold the answer along the
+/// corridor (`TrustRule::holds`, which refuses most such slides on its own).
 #[test]
 fn a_trusted_answer_far_from_the_guess_is_checked() {
     use robot::localization::{FAR_SLIDE_M, Lorentz};
@@ -807,7 +838,12 @@ fn a_trusted_answer_far_from_the_guess_is_checked() {
             let after = checked.match_scans(&case.reference, &case.current, case.guess);
             let slid = |r: &robot::localization::MatchResult| {
                 let off = case.truth.relative(&r.pose);
-                r.converged && off.x.hypot(off.y) > 0.3
+                let unheld = robot::localization::MatchQuality {
+                    held: true,
+                    ..r.quality
+                };
+                robot::localization::TrustRule::default().trusts(&unheld)
+                    && off.x.hypot(off.y) > 0.3
             };
             slid_before += usize::from(slid(&before));
             slid_after += usize::from(slid(&after));
@@ -1562,12 +1598,20 @@ fn a_restart_that_fits_fewer_points_does_not_replace_the_first() {
     };
     let slid = before.match_scans(&reference, &current, guess);
     let (metres, _) = off(&slid);
+    // Trusted then by the rule as it stood (`held` was not asked before 2026-12-06); the scans'
+    // hold along the walls now refuses it too.
+    let rule = robot::localization::TrustRule::default();
+    let without_hold = robot::localization::MatchQuality {
+        held: true,
+        ..slid.quality
+    };
     assert!(
-        slid.converged && metres > 0.3,
-        "before: {:.0} mm off, converged {}",
+        rule.trusts(&without_hold) && metres > 0.3,
+        "before: {:.0} mm off, trusted without the hold {}",
         metres * 1e3,
-        slid.converged
+        rule.trusts(&without_hold)
     );
+    assert!(!slid.converged && !slid.quality.held, "{:?}", slid.quality);
     assert!(slid.quality.inlier_share + 0.1 < answer.quality.inlier_share);
     // The map builder falls back to odometry for it, and counts it.
     let mut builder = MapBuilder::new(Box::new(Lorentz::with_lines()), MapConfig::default());
