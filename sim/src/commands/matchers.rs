@@ -358,14 +358,14 @@ pub struct Outcome {
 }
 
 /// The header of `pairs.csv`.
-pub const OUTCOMES_HEADER: &str = "seed,set,pair,matcher,success,error_mm,error_deg,converged,settled,iterations,inliers,inlier_share,rms_mm,sigma_x_mm,sigma_y_mm,sigma_theta_deg,step_mm,step_deg,truth_inlier_share,disputed,guess_error_mm,guess_error_deg,agreed,x_m,y_m,theta_deg";
+pub const OUTCOMES_HEADER: &str = "seed,set,pair,matcher,success,error_mm,error_deg,converged,settled,iterations,inliers,inlier_share,rms_mm,sigma_x_mm,sigma_y_mm,sigma_theta_deg,step_mm,step_deg,truth_inlier_share,disputed,guess_error_mm,guess_error_deg,agreed,x_m,y_m,theta_deg,spread,held";
 
 impl Outcome {
     /// The outcome as a line of `pairs.csv`.
     pub fn csv(&self) -> String {
         let q = &self.result.quality;
         format!(
-            "{},\"{}\",{},{},{},{:.2},{:.3},{},{},{},{},{:.4},{:.2},{:.2},{:.2},{:.3},{:.2},{:.3},{:.4},{},{:.2},{:.3},{},{:.5},{:.5},{:.4}",
+            "{},\"{}\",{},{},{},{:.2},{:.3},{},{},{},{},{:.4},{:.2},{:.2},{:.2},{:.3},{:.2},{:.3},{:.4},{},{:.2},{:.3},{},{:.5},{:.5},{:.4},{:.4},{}",
             self.seed,
             self.set,
             self.pair,
@@ -392,6 +392,8 @@ impl Outcome {
             self.result.pose.x,
             self.result.pose.y,
             self.result.pose.theta.to_degrees(),
+            q.spread,
+            u8::from(q.held),
         )
     }
 }
@@ -1286,7 +1288,10 @@ mod tests {
         );
         // Its line in `pairs.csv` says so, with the answer.
         let line = outcomes[0].csv();
-        assert!(line.ends_with(",1,0.10000,0.00000,0.0000"), "{line}");
+        assert!(
+            line.ends_with(",1,0.10000,0.00000,0.0000,0.0000,0"),
+            "{line}"
+        );
         assert!(line.starts_with("1,\"real\",0,"), "{line}");
         assert_eq!(line.split(',').count(), OUTCOMES_HEADER.split(',').count());
     }
