@@ -433,6 +433,7 @@ mod tests {
             matched: reference.map(|_| MatchResult::unmatched(Pose2::IDENTITY)),
             reference: reference.map(|r| Stamp::from_millis(r * 1000)),
             trusted,
+            held_across: false,
         }
     }
 

@@ -2,6 +2,7 @@
 //! interpolated to each scan's stamp (002 §7.3.3).
 
 use super::matcher::{MatchResult, Reference, ScanMatcher};
+use super::quality::{MatchQuality, TrustRule};
 use super::scan::{RangeScan, ScanPoints};
 use crate::geometry::Pose2;
 use crate::odometry::PoseHistory;
@@ -40,6 +41,14 @@ pub struct MapConfig {
     /// [`TrustRule`](super::TrustRule)) is used; any other falls back to odometry and is counted
     /// in [`MatchStats::fallbacks`]. Default true.
     pub require_converged: bool,
+    /// A match the trust rule refuses only because the scans do not hold it along its free
+    /// direction ([`MatchQuality::held`]: a corridor whose advance they leave open) places its
+    /// scan by the match across that direction and in heading, and by odometry along it, not
+    /// by odometry alone; it is still a fallback, counted in [`MatchStats::held_across`].
+    /// Default true.
+    ///
+    /// [`MatchQuality::held`]: super::MatchQuality::held
+    pub held_across: bool,
 }
 
 impl Default for MapConfig {
@@ -54,6 +63,7 @@ impl Default for MapConfig {
             max_correction_rad: 45f64.to_radians(),
             correction_share: 0.5,
             require_converged: true,
+            held_across: true,
         }
     }
 }
@@ -75,6 +85,9 @@ pub struct Placed {
     /// Whether the match was used (converged, enough correspondences, a correction within the
     /// bounds) rather than the odometry guess.
     pub trusted: bool,
+    /// Whether, not trusted, the scan was placed by the match across its free direction and in
+    /// heading and by odometry along it ([`MapConfig::held_across`]).
+    pub held_across: bool,
 }
 
 /// How the matches of a run went.
@@ -84,8 +97,12 @@ pub struct MatchStats {
     pub matches: usize,
     /// Matches trusted (converged, enough correspondences, a plausible correction).
     pub trusted: usize,
-    /// Matches not trusted, whose scans were placed by odometry instead.
+    /// Matches not trusted, whose scans were placed by odometry instead (along a corridor
+    /// only, for those of [`held_across`](Self::held_across)).
     pub fallbacks: usize,
+    /// Of the fallbacks, those placed by the match across a corridor and by odometry along it
+    /// ([`MapConfig::held_across`]).
+    pub held_across: usize,
     /// Matches that converged before their iteration cap.
     pub converged: usize,
     /// Mean correspondence searches per match.
@@ -103,6 +120,7 @@ impl MatchStats {
                 .iter()
                 .filter(|p| p.matched.is_some() && !p.trusted)
                 .count(),
+            held_across: placed.iter().filter(|p| p.held_across).count(),
             converged: matches.iter().filter(|m| m.converged).count(),
             mean_iterations: matches.iter().map(|m| f64::from(m.iterations)).sum::<f64>()
                 / matches.len().max(1) as f64,
@@ -262,7 +280,7 @@ impl MapBuilder {
 
     fn place(&mut self, stamp: Stamp, points: ScanPoints, mount: Pose2, odometry: Pose2) {
         let reference = self.key.as_ref().map(|key| key.stamp);
-        let (estimate, matched, trusted) = match (&self.key, self.placed.last()) {
+        let (estimate, matched, trusted, held_across) = match (&self.key, self.placed.last()) {
             (Some(key), Some(last)) => {
                 // Dead-reckon from the last placed scan, then express it in the reference: the
                 // current laser frame seen from the reference's laser frame.
@@ -270,18 +288,41 @@ impl MapBuilder {
                 let base_guess = key.estimate.relative(&predicted);
                 let laser_guess = key.mount.inverse().compose(&base_guess).compose(&mount);
                 let result = self.matcher.align(&key.reference, &points, laser_guess);
-                let trusted = (result.converged || !self.config.require_converged)
-                    && result.correspondences >= self.config.min_correspondences
-                    && result.pose.x.is_finite()
-                    && result.pose.y.is_finite()
-                    && result.pose.theta.is_finite()
-                    && self.plausible_correction(&base_guess, &laser_guess, &result.pose);
-                let laser = if trusted { result.pose } else { laser_guess };
+                let usable = |pose: &Pose2| {
+                    result.correspondences >= self.config.min_correspondences
+                        && pose.x.is_finite()
+                        && pose.y.is_finite()
+                        && pose.theta.is_finite()
+                        && self.plausible_correction(&base_guess, &laser_guess, pose)
+                };
+                let trusted =
+                    (result.converged || !self.config.require_converged) && usable(&result.pose);
+                // Trusted but for the hold along a corridor: the match across it and in
+                // heading, the odometry along it.
+                let across = (!trusted
+                    && self.config.held_across
+                    && !result.quality.held
+                    && TrustRule::default().trusts(&MatchQuality {
+                        held: true,
+                        ..result.quality
+                    }))
+                .then(|| across_only(&result.pose, &laser_guess, result.quality.free))
+                .filter(|pose| usable(pose));
+                let laser = match (trusted, across) {
+                    (true, _) => result.pose,
+                    (false, Some(pose)) => pose,
+                    (false, None) => laser_guess,
+                };
                 let base = key.mount.compose(&laser).compose(&mount.inverse());
-                (key.estimate.compose(&base), Some(result), trusted)
+                (
+                    key.estimate.compose(&base),
+                    Some(result),
+                    trusted,
+                    across.is_some(),
+                )
             }
-            _ if self.odometry_frame => (odometry, None, false),
-            _ => (Pose2::IDENTITY, None, false),
+            _ if self.odometry_frame => (odometry, None, false, false),
+            _ => (Pose2::IDENTITY, None, false, false),
         };
         let laser_pose = estimate.compose(&mount);
         self.map.extend(points.xy.iter().map(|p| {
@@ -311,8 +352,22 @@ impl MapBuilder {
             reference: matched.as_ref().and(reference),
             matched,
             trusted,
+            held_across,
         });
     }
+}
+
+/// `found` (a match's pose of the current laser frame in the reference's) with its position
+/// along `free` (a unit direction in the reference's frame) taken from `guess`: what the scans
+/// hold of a match in a corridor (across it, and the heading) and what odometry gives (the
+/// advance along it).
+fn across_only(found: &Pose2, guess: &Pose2, free: [f64; 2]) -> Pose2 {
+    let along = (guess.x - found.x) * free[0] + (guess.y - found.y) * free[1];
+    Pose2::new(
+        found.x + along * free[0],
+        found.y + along * free[1],
+        found.theta,
+    )
 }
 
 #[cfg(test)]
@@ -384,5 +439,65 @@ mod tests {
         assert!(last.trusted);
         assert!(last.estimate.distance(&truth[3]) < 0.01, "{last:?}");
         assert!((last.estimate.theta - truth[3].theta).abs() < 0.005);
+    }
+
+    /// A corridor 2 m wide whose walls run past the laser's 32 m, seen by a SICK's 361 beams
+    /// with a centimetre of noise: nothing says how far the robot advanced along it. Odometry
+    /// says 0.25 m where it went 0.3 m, and puts it 3 cm to the side and 1.5° off. The match is
+    /// not trusted (the scans do not hold it along the corridor), so the scan is placed by the
+    /// match across the corridor and in heading, and by odometry along it; without
+    /// `held_across`, by odometry alone.
+    #[test]
+    fn a_corridor_places_its_scan_by_the_match_across_and_odometry_along() {
+        let scan = |pose: Pose2, stamp: Stamp, first: usize| {
+            let ranges = (0..361)
+                .map(|i| {
+                    let a = pose.theta + (i as f64 * 0.5 - 90.0).to_radians();
+                    let s = a.sin();
+                    let wall = if s > 0.0 { 1.0 } else { -1.0 };
+                    let t = (wall - pose.y) / s;
+                    let noise = 0.02 * (((first + i) as f64 * 0.754_877_666).fract() - 0.5);
+                    if t.is_finite() && t > 0.0 && t < 32.0 {
+                        t + noise
+                    } else {
+                        f64::INFINITY
+                    }
+                })
+                .collect();
+            RangeScan::new(-90f64.to_radians(), 0.5f64.to_radians(), 32.0, ranges).stamped(stamp)
+        };
+        // The map's frame is the first scan's: the corridor runs along its x.
+        let truth = [Pose2::IDENTITY, Pose2::new(0.3, 0.02, 0.03)];
+        let odometry = [truth[0], Pose2::new(0.25, 0.05, 0.03 + 1.5f64.to_radians())];
+        let run = |held_across: bool| {
+            let config = MapConfig {
+                held_across,
+                ..MapConfig::default()
+            };
+            let mut map = MapBuilder::new(MatcherKind::LorentzLines.build(), config);
+            for k in 0..2 {
+                let t = Stamp::from_millis(100 * k as u64);
+                map.push_odometry(t, odometry[k]);
+                map.push_scan(scan(truth[k], t, 1000 * k));
+            }
+            map.finish();
+            *map.placed().last().unwrap()
+        };
+        let last = run(true);
+        let result = last.matched.unwrap();
+        assert!(!result.converged && !result.quality.held, "{result:?}");
+        assert!(!last.trusted && last.held_across);
+        // Across the corridor (y) and in heading, as the truth; along it (x), as odometry.
+        let placed = last.estimate;
+        assert!((placed.y - truth[1].y).abs() < 0.01, "{placed:?}");
+        assert!(
+            (placed.theta - truth[1].theta).abs() < 0.2f64.to_radians(),
+            "{placed:?}"
+        );
+        assert!((placed.x - odometry[1].x).abs() < 0.01, "{placed:?}");
+        assert_eq!(MatchStats::of(&[last]).held_across, 1);
+        let alone = run(false);
+        assert!(!alone.trusted && !alone.held_across);
+        assert!(alone.estimate.distance(&odometry[1]) < 1e-9, "{alone:?}");
     }
 }

@@ -51,6 +51,7 @@ mod tests {
             matched: None,
             reference: None,
             trusted: false,
+            held_across: false,
         }
     }
 

@@ -246,6 +246,7 @@ pub fn read_run_folder(dir: &Path) -> Result<RunFolder, FolderError> {
                     matched: None,
                     reference: None,
                     trusted: true,
+                    held_across: false,
                 })
             })
             .collect::<Vec<_>>()
