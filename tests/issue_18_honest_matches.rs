@@ -510,29 +510,7 @@ fn a_corrected_log_of_ones_own_adds_two_rows() {
         assert_eq!(own.truth, bundled.truth);
     }
 
-    let run = |args: &[&str], dir: &std::path::Path| {
-        let run = Command::new(env!("CARGO_BIN_EXE_twin"))
-            .args([
-                "matchers",
-                "--pairs",
-                "6",
-                "--quiet",
-                "--matchers",
-                "lorentz-lines",
-            ])
-            .args(args)
-            .arg("--out")
-            .arg(dir)
-            .current_dir(repo())
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&run.stderr).into_owned();
-        (
-            run.status.success(),
-            String::from_utf8(run.stdout).unwrap(),
-            stderr,
-        )
-    };
+    let run = twin_matchers;
     let (ok, table, stderr) = run(&["--log", log.to_str().unwrap()], &out.join("with"));
     assert!(ok, "{stderr}");
     assert!(
@@ -560,6 +538,32 @@ fn a_corrected_log_of_ones_own_adds_two_rows() {
         "{stderr}"
     );
     let _ = std::fs::remove_dir_all(&out);
+}
+
+/// `twin matchers --pairs 6 --quiet --matchers lorentz-lines` with `args`, writing into `dir`:
+/// whether it succeeded, its standard output and its standard error.
+fn twin_matchers(args: &[&str], dir: &std::path::Path) -> (bool, String, String) {
+    let run = Command::new(env!("CARGO_BIN_EXE_twin"))
+        .args([
+            "matchers",
+            "--pairs",
+            "6",
+            "--quiet",
+            "--matchers",
+            "lorentz-lines",
+        ])
+        .args(args)
+        .arg("--out")
+        .arg(dir)
+        .current_dir(repo())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr).into_owned();
+    (
+        run.status.success(),
+        String::from_utf8(run.stdout).unwrap(),
+        stderr,
+    )
 }
 
 /// `twin matchers --world PATH` adds four synthetic rows in that world alone (the LMS at 0.5°
@@ -591,29 +595,7 @@ fn a_world_of_ones_own_adds_four_synthetic_rows() {
         }
     }
     let out = tempfile_dir("twin-matchers-world");
-    let run = |args: &[&str], dir: &std::path::Path| {
-        let run = Command::new(env!("CARGO_BIN_EXE_twin"))
-            .args([
-                "matchers",
-                "--pairs",
-                "6",
-                "--quiet",
-                "--matchers",
-                "lorentz-lines",
-            ])
-            .args(args)
-            .arg("--out")
-            .arg(dir)
-            .current_dir(repo())
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&run.stderr).into_owned();
-        (
-            run.status.success(),
-            String::from_utf8(run.stdout).unwrap(),
-            stderr,
-        )
-    };
+    let run = twin_matchers;
     let (ok, table, stderr) = run(&["--world", "worlds/l-corridor.toml"], &out.join("with"));
     assert!(ok, "{stderr}");
     for row in [

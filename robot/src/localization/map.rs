@@ -2,7 +2,7 @@
 //! interpolated to each scan's stamp (002 §7.3.3).
 
 use super::matcher::{MatchResult, Reference, ScanMatcher};
-use super::quality::{MatchQuality, TrustRule};
+use super::quality::TrustRule;
 use super::scan::{RangeScan, ScanPoints};
 use crate::geometry::Pose2;
 use crate::odometry::PoseHistory;
@@ -301,11 +301,7 @@ impl MapBuilder {
                 // heading, the odometry along it.
                 let across = (!trusted
                     && self.config.held_across
-                    && !result.quality.held
-                    && TrustRule::default().trusts(&MatchQuality {
-                        held: true,
-                        ..result.quality
-                    }))
+                    && TrustRule::default().trusts_but_hold(&result.quality))
                 .then(|| across_only(&result.pose, &laser_guess, result.quality.free))
                 .filter(|pose| usable(pose));
                 let laser = match (trusted, across) {

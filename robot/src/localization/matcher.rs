@@ -139,10 +139,11 @@ pub trait ScanMatcher: Send + Sync + fmt::Debug {
             result.quality = rule.assess(reference, &current.xy, &result.pose);
         }
         // Asked only of an answer the rest of the rule trusts: two more searches.
-        if rule.trusts(&result.quality) {
-            result.quality.held = rule.holds(reference, &current.xy, &result.pose, &result.quality);
-        }
         result.converged = rule.trusts(&result.quality);
+        if result.converged {
+            result.quality.held = rule.holds(reference, &current.xy, &result.pose, &result.quality);
+            result.converged = result.quality.held;
+        }
         result
     }
 

@@ -229,6 +229,13 @@ impl TrustRule {
         })
     }
 
+    /// Whether a match of this quality passes every test of [`trusts`](Self::trusts) but
+    /// [`held`](MatchQuality::held): the scans hold it across its free direction and in
+    /// heading, and leave it free along that direction (a corridor's advance).
+    pub fn trusts_but_hold(&self, q: &MatchQuality) -> bool {
+        !q.held && self.trusts(&MatchQuality { held: true, ..*q })
+    }
+
     /// The quality of `pose` (the current frame in the reference frame) for the current scan's
     /// points `current` against `reference`.
     pub fn assess(

@@ -131,7 +131,12 @@ pub fn synthetic_set(
             let mut rng = rng::substream(stream, k as u64);
             let start = maker
                 .free_pose(0.4, &mut rng)
-                .map_err(|why| CommandError::Pairs(format!("{}: {why}", world.name)))?;
+                .map_err(|why| {
+                    CommandError::Pairs(format!(
+                        "{}: {why}: the world must leave room for the robot 0.4 m from every wall, walled on as many sides as its start",
+                        world.name
+                    ))
+                })?;
             let u = |rng: &mut SimRng| 2.0 * rng.random::<f64>() - 1.0;
             let motion = Pose2::new(
                 0.3 * u(&mut rng),

@@ -332,7 +332,9 @@ impl<'a> Trials<'a> {
             trial: index,
             message,
         };
-        let start = maker.free_pose(study.clearance_m, &mut rng).map_err(fail)?;
+        let start = maker
+            .free_pose(study.clearance_m, &mut rng)
+            .map_err(|why| fail(format!("{why}: lower the study's clearance_m")))?;
         let motion = draw_motion(study, &mut rng);
         let (odometry, rest) =
             drive(study, start, motion, seed).map_err(|e| fail(e.to_string()))?;

@@ -96,7 +96,7 @@ impl PairMaker {
             }
         }
         Err(format!(
-            "no start pose inside the building {clearance} m from every wall in {MAX_DRAWS} random draws: lower the study's clearance_m"
+            "no start pose inside the building {clearance} m from every wall in {MAX_DRAWS} random draws"
         ))
     }
 }
