@@ -148,12 +148,7 @@ impl LocalisationRecord {
         &'a self,
         scans: &'a [ScanRecord],
     ) -> impl Iterator<Item = (f64, f64)> + 'a {
-        trusted_match_errors(&self.placed, move |stamp| {
-            scans
-                .binary_search_by_key(&stamp, |s| s.scan.stamp)
-                .ok()
-                .map(|i| scans[i].truth)
-        })
+        trusted_match_errors(&self.placed, move |stamp| truth_at(scans, stamp))
     }
 
     /// The trusted matches whose answer lies more than `metres` or `radians` from the truth
@@ -167,6 +162,23 @@ impl LocalisationRecord {
     pub fn judge_trusted(&self, scans: &[ScanRecord], tolerance: (f64, f64)) -> TrustedJudged {
         TrustedJudged::of(self.trusted_match_errors(scans), tolerance)
     }
+
+    /// Every match relied on across a corridor ([`Placed::held_across`]) judged against the
+    /// truth in `scans` ([`held_across_match_errors`]), wrong beyond `tolerance`.
+    pub fn judge_held_across(&self, scans: &[ScanRecord], tolerance: (f64, f64)) -> TrustedJudged {
+        TrustedJudged::of(
+            held_across_match_errors(&self.placed, move |stamp| truth_at(scans, stamp)),
+            tolerance,
+        )
+    }
+}
+
+/// The base's true pose at `stamp`, if a scan of `scans` (in order) was taken then.
+fn truth_at(scans: &[ScanRecord], stamp: Stamp) -> Option<Pose2> {
+    scans
+        .binary_search_by_key(&stamp, |s| s.scan.stamp)
+        .ok()
+        .map(|i| scans[i].truth)
 }
 
 /// A run's trusted matches against the truth: how many, how many wrong, and the worst.
@@ -215,6 +227,39 @@ pub fn trusted_match_errors<'a>(
         let off = true_motion.relative(&answered);
         Some((off.x.hypot(off.y), off.theta.abs()))
     })
+}
+
+/// How far each match the map builder relied on across a corridor ([`Placed::held_across`]: it
+/// placed the scan by the match across the match's free direction and in heading, by odometry
+/// along it) lies from the truth in what it was relied on for: across that direction, metres,
+/// and in heading, radians. The match's answer (the current laser frame in the reference's)
+/// against the laser's true motion between the scans (the base's, through each scan's
+/// [mount](Placed::mount)), `truth` giving the base's true pose at a stamp. A match whose
+/// scans have no truth is left out.
+pub fn held_across_match_errors<'a>(
+    placed: &'a [Placed],
+    truth: impl Fn(Stamp) -> Option<Pose2> + 'a,
+) -> impl Iterator<Item = (f64, f64)> + 'a {
+    let mount = |stamp: Stamp| {
+        placed
+            .binary_search_by_key(&stamp, |p| p.stamp)
+            .ok()
+            .map(|i| placed[i].mount)
+    };
+    placed
+        .iter()
+        .filter(|p| p.held_across)
+        .filter_map(move |p| {
+            let (found, reference) = (p.matched.as_ref()?, p.reference?);
+            let from = truth(reference)?.compose(&mount(reference)?);
+            let true_motion = from.relative(&truth(p.stamp)?.compose(&p.mount));
+            // Across the free direction: the free direction turned a quarter.
+            let free = found.quality.free;
+            let across =
+                (found.pose.x - true_motion.x) * free[1] - (found.pose.y - true_motion.y) * free[0];
+            let heading = robot::geometry::wrap_angle(found.pose.theta - true_motion.theta);
+            Some((across.abs(), heading.abs()))
+        })
 }
 
 /// When a trusted match counts as wrong in a run of the twin
@@ -434,6 +479,7 @@ mod tests {
             reference: reference.map(|r| Stamp::from_millis(r * 1000)),
             trusted,
             held_across: false,
+            mount: Pose2::IDENTITY,
         }
     }
 
@@ -480,5 +526,48 @@ mod tests {
         // A scan without truth leaves its match out.
         let none = |_: Stamp| None;
         assert_eq!(trusted_match_errors(&placed, none).count(), 0);
+    }
+
+    /// A match relied on across a corridor is judged across its free direction and in heading,
+    /// in the laser's frame (the laser 0.2 m ahead of the base and turned 90°): its error along
+    /// the corridor is what odometry answered for, not the match.
+    #[test]
+    fn a_match_relied_on_across_a_corridor_is_judged_across_it() {
+        let mount = Pose2::new(0.2, 0.0, 90f64.to_radians());
+        let truth = [Pose2::new(1.0, 2.0, 0.3), Pose2::new(1.5, 2.1, 0.35)];
+        let true_laser = truth[0].compose(&mount).relative(&truth[1].compose(&mount));
+        // The corridor runs along the reference laser's y: 0.3 m wrong along it, 4 mm across
+        // and 0.1° in heading.
+        let mut found = MatchResult::unmatched(Pose2::new(
+            true_laser.x + 0.004,
+            true_laser.y + 0.3,
+            true_laser.theta + 0.1f64.to_radians(),
+        ));
+        found.quality.free = [0.0, 1.0];
+        let mut second = placed(1, truth[1], Some(0), false);
+        second.matched = Some(found);
+        second.held_across = true;
+        let placed = vec![
+            Placed {
+                mount,
+                ..placed(0, truth[0], None, false)
+            },
+            Placed { mount, ..second },
+        ];
+        let truth_at = |stamp: Stamp| truth.get(stamp.secs_f64().round() as usize).copied();
+        let errors: Vec<(f64, f64)> = held_across_match_errors(&placed, truth_at).collect();
+        assert_eq!(errors.len(), 1, "{errors:?}");
+        assert!((errors[0].0 - 0.004).abs() < 1e-9, "{errors:?}");
+        assert!(
+            (errors[0].1 - 0.1f64.to_radians()).abs() < 1e-9,
+            "{errors:?}"
+        );
+        // Across the other way it is 0.3 m wrong; and a match not relied on is not judged.
+        let mut along = placed.clone();
+        along[1].matched.as_mut().unwrap().quality.free = [1.0, 0.0];
+        let errors: Vec<(f64, f64)> = held_across_match_errors(&along, truth_at).collect();
+        assert!((errors[0].0 - 0.3).abs() < 1e-9, "{errors:?}");
+        along[1].held_across = false;
+        assert_eq!(held_across_match_errors(&along, truth_at).count(), 0);
     }
 }

@@ -73,6 +73,14 @@ pub struct MatchQuality {
     ///
     /// [`ScanMatcher::align`]: super::ScanMatcher::align
     pub held: bool,
+    /// The standard deviations of the position across [`free`](Self::free) (metres) and of θ
+    /// (radians) when the position along it is known (the inverse of the information's
+    /// across-and-heading block): what the scans hold of a corridor's answer, finite even where
+    /// the walls leave the advance wholly free and [`sigma`](Self::sigma) is infinite.
+    pub across_sigma: [f64; 2],
+    /// How far one Gauss–Newton step of the inliers' point-to-line error would move the answer
+    /// across [`free`](Self::free) (metres) and in θ (radians), its position along it held.
+    pub across_step: [f64; 2],
 }
 
 impl MatchQuality {
@@ -87,6 +95,8 @@ impl MatchQuality {
         spread: 0.0,
         free: [1.0, 0.0],
         held: false,
+        across_sigma: [f64::INFINITY; 2],
+        across_step: [f64::INFINITY; 2],
     };
 }
 
@@ -236,6 +246,28 @@ impl TrustRule {
         !q.held && self.trusts(&MatchQuality { held: true, ..*q })
     }
 
+    /// Whether a match of this quality can be trusted across its free direction and in heading,
+    /// but not along that direction: its surfaces face nearly one way (a
+    /// [`spread`](MatchQuality::spread) below [`hold_below_spread`](Self::hold_below_spread)),
+    /// the match is not [trusted](Self::trusts), and the tests of [`trusts`](Self::trusts) pass
+    /// with σ and the Gauss–Newton step taken across and in heading
+    /// ([`across_sigma`](MatchQuality::across_sigma),
+    /// [`across_step`](MatchQuality::across_step)) and the hold not asked. A corridor whose
+    /// advance the scans leave open: because its answer moved along it fits as many points
+    /// ([`held`](MatchQuality::held) false), or because its walls' information leaves σ along
+    /// it above [`max_sigma_m`](Self::max_sigma_m) (a corridor without noise, infinite).
+    pub fn trusts_across(&self, q: &MatchQuality) -> bool {
+        q.spread < self.hold_below_spread
+            && !self.trusts(q)
+            && (self.trusts_but_hold(q)
+                || self.trusts(&MatchQuality {
+                    sigma: [0.0, 0.0, q.across_sigma[1]],
+                    step: q.across_step,
+                    held: true,
+                    ..*q
+                }) && q.across_sigma[0] <= self.max_sigma_m)
+    }
+
     /// The quality of `pose` (the current frame in the reference frame) for the current scan's
     /// points `current` against `reference`.
     pub fn assess(
@@ -383,6 +415,26 @@ impl TrustRule {
             0.0
         };
         let [c, s] = direction(block);
+        // Across the free direction (along [c, s]) and in heading, the advance along it held:
+        // the information's block for those two, its inverse and its Gauss–Newton step.
+        let (across_sigma, across_step) = {
+            let uu = c * c * block[0] + 2.0 * c * s * block[1] + s * s * block[2];
+            let ut = c * information[0][2] + s * information[1][2];
+            let tt = information[2][2];
+            let det = uu * tt - ut * ut;
+            if det > 0.0 && det.is_finite() {
+                let gu = c * gradient[0] + s * gradient[1];
+                let gt = gradient[2];
+                let du = -(tt * gu - ut * gt) / det;
+                let dt = -(uu * gt - ut * gu) / det;
+                (
+                    [(tt / det * scale2).sqrt(), (uu / det * scale2).sqrt()],
+                    [du.abs(), dt.abs()],
+                )
+            } else {
+                ([f64::INFINITY; 2], [f64::INFINITY; 2])
+            }
+        };
         let quality = MatchQuality {
             inliers,
             inlier_share: inliers as f64 / judged.max(1) as f64,
@@ -393,6 +445,8 @@ impl TrustRule {
             spread,
             free: [-s, c],
             held: true,
+            across_sigma,
+            across_step,
         };
         floor
             .is_none_or(|floor| inliers > floor)
@@ -1290,6 +1344,8 @@ mod tests {
             spread: 0.4,
             free: [1.0, 0.0],
             held: true,
+            across_sigma: [0.003, 0.001],
+            across_step: [0.001, 0.001],
         };
         assert!(rule.trusts(&good) && rule.trusts_but_overlap(&good));
         let little = MatchQuality {
@@ -1316,6 +1372,67 @@ mod tests {
             },
         ] {
             assert!(!rule.trusts_but_overlap(&other), "{other:?}");
+        }
+    }
+
+    /// A corridor's answer held across it and in heading, free along it — because the hold
+    /// test found it free there, or because the walls' information left σ along it infinite
+    /// (no noise) — is trusted across only; a trusted answer is not, nor one whose surfaces
+    /// spread, nor one that fits badly or is loose across.
+    #[test]
+    fn a_corridor_is_trusted_across_only() {
+        let rule = TrustRule::default();
+        let corridor = MatchQuality {
+            inliers: 300,
+            inlier_share: 0.95,
+            rms_m: 0.004,
+            sigma: [0.003, 0.001, 0.0005],
+            sparse: false,
+            step: [0.001, 0.0001],
+            spread: 0.01,
+            free: [1.0, 0.0],
+            held: false,
+            across_sigma: [0.001, 0.0005],
+            across_step: [0.001, 0.0001],
+        };
+        let noiseless = MatchQuality {
+            sigma: [f64::INFINITY, 0.0004, 0.0001],
+            step: [f64::INFINITY; 2],
+            held: true,
+            rms_m: 0.0,
+            ..corridor
+        };
+        for q in [corridor, noiseless] {
+            assert!(!rule.trusts(&q) && rule.trusts_across(&q), "{q:?}");
+        }
+        assert!(rule.trusts_but_hold(&corridor) && !rule.trusts_but_hold(&noiseless));
+        for other in [
+            MatchQuality {
+                held: true,
+                ..corridor
+            },
+            MatchQuality {
+                spread: 0.4,
+                ..noiseless
+            },
+            MatchQuality {
+                rms_m: 0.04,
+                ..noiseless
+            },
+            MatchQuality {
+                across_sigma: [0.02, 0.0005],
+                ..noiseless
+            },
+            MatchQuality {
+                across_step: [0.001, 0.1],
+                ..noiseless
+            },
+            MatchQuality {
+                inlier_share: 0.3,
+                ..noiseless
+            },
+        ] {
+            assert!(!rule.trusts_across(&other), "{other:?}");
         }
     }
 }

@@ -52,6 +52,7 @@ mod tests {
             reference: None,
             trusted: false,
             held_across: false,
+            mount: Pose2::IDENTITY,
         }
     }
 

@@ -261,14 +261,20 @@ fn evaluate_one(
                 return outcome("no matches".into(), "a [localisation] table".into(), false);
             };
             let judged = loc.judge_trusted(&record.scans, WRONG_MATCH);
+            let across = loc.judge_held_across(&record.scans, WRONG_MATCH);
             single(
-                judged.wrong as f64,
+                (judged.wrong + across.wrong) as f64,
                 format!(
-                    "{} of {} trusted (the worst {:.3} m, {:.2}° from the true motion)",
+                    "{} of {} trusted (the worst {:.3} m, {:.2}° from the true motion), \
+                     {} of {} relied on across a corridor (the worst {:.3} m across, {:.2}°)",
                     judged.wrong,
                     judged.trusted,
                     judged.worst_m,
-                    judged.worst_rad.to_degrees()
+                    judged.worst_rad.to_degrees(),
+                    across.wrong,
+                    across.trusted,
+                    across.worst_m,
+                    across.worst_rad.to_degrees()
                 ),
             )
         }

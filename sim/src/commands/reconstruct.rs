@@ -247,6 +247,9 @@ pub fn read_run_folder(dir: &Path) -> Result<RunFolder, FolderError> {
                     reference: None,
                     trusted: true,
                     held_across: false,
+                    mount: line
+                        .laser_mount
+                        .map_or(Pose2::IDENTITY, |[x, y, theta]| Pose2::new(x, y, theta)),
                 })
             })
             .collect::<Vec<_>>()

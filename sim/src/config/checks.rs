@@ -28,8 +28,9 @@ pub enum CheckKind {
     NoReturnShare,
     /// Share of the estimate's map points within 5 cm of a true surface.
     MapQuality,
-    /// Scan matches the localisation trusted that lie more than 5 cm or 1° from the true
-    /// motion between their scans: a `converged` flag that lied.
+    /// Scan matches the localisation relied on that lie more than 5 cm or 1° from the true
+    /// motion between their scans: trusted ones (a `converged` flag that lied), and those it
+    /// relied on across a corridor only, judged across it and in heading.
     WrongTrustedMatches,
     /// Largest error (m) of the listed sonar transducers' last echoes against the true distance
     /// along their axes.

@@ -71,6 +71,15 @@ pub struct LocalisationSummary {
     pub worst_trusted_error_m: f64,
     /// … and the largest heading difference, degrees (each over every trusted match).
     pub worst_trusted_error_deg: f64,
+    /// Matches relied on across a corridor ([`MatchStats::held_across`]) more than 5 cm across
+    /// their free direction or 1° in heading from the true motion
+    /// ([`held_across_match_errors`](crate::record::held_across_match_errors)).
+    pub wrong_held_across: usize,
+    /// The largest distance across its free direction of such a match from the true motion,
+    /// metres …
+    pub worst_held_across_error_m: f64,
+    /// … and the largest heading difference, degrees.
+    pub worst_held_across_error_deg: f64,
     /// Wall-clock milliseconds spent localising per scan (machine-dependent).
     pub wall_ms_per_scan: f64,
 }
@@ -104,6 +113,7 @@ impl LocalisationSummary {
             / n)
             .sqrt();
         let judged = loc.judge_trusted(&record.scans, WRONG_MATCH);
+        let across = loc.judge_held_across(&record.scans, WRONG_MATCH);
         LocalisationSummary {
             matcher: loc.matcher.to_string(),
             final_error_m,
@@ -115,6 +125,9 @@ impl LocalisationSummary {
             wrong_trusted: judged.wrong,
             worst_trusted_error_m: judged.worst_m,
             worst_trusted_error_deg: judged.worst_rad.to_degrees(),
+            wrong_held_across: across.wrong,
+            worst_held_across_error_m: across.worst_m,
+            worst_held_across_error_deg: across.worst_rad.to_degrees(),
             wall_ms_per_scan: loc.wall_seconds * 1e3 / n,
         }
     }
