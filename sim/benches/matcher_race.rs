@@ -87,7 +87,8 @@ fn main() {
             }
             let file =
                 Path::new(&dir).join(format!("{}.csv", set.name.replace([' ', ',', '/'], "_")));
-            if let Err(error) = std::fs::write(&file, csv) {
+            let written = std::fs::create_dir_all(&dir).and_then(|()| std::fs::write(&file, csv));
+            if let Err(error) = written {
                 eprintln!("RACE_CSV={dir:?}: cannot write {}: {error}", file.display());
                 std::process::exit(2);
             }
