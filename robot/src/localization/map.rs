@@ -41,13 +41,14 @@ pub struct MapConfig {
     /// [`TrustRule`](super::TrustRule)) is used; any other falls back to odometry and is counted
     /// in [`MatchStats::fallbacks`]. Default true.
     pub require_converged: bool,
-    /// A match the trust rule refuses only because the scans do not hold it along its free
-    /// direction ([`MatchQuality::held`]: a corridor whose advance they leave open) places its
-    /// scan by the match across that direction and in heading, and by odometry along it, not
-    /// by odometry alone; it is still a fallback, counted in [`MatchStats::held_across`].
-    /// Default true.
+    /// A match the trust rule refuses only along its free direction (a corridor whose advance
+    /// the scans leave open: [`MatchQuality::held`] false, or σ along it too large;
+    /// [`TrustRule::trusts_across`]) places its scan by the match across that direction and in
+    /// heading, and by odometry along it, not by odometry alone; it is still a fallback,
+    /// counted in [`MatchStats::held_across`]. Default true.
     ///
     /// [`MatchQuality::held`]: super::MatchQuality::held
+    /// [`TrustRule::trusts_across`]: super::TrustRule::trusts_across
     pub held_across: bool,
 }
 
