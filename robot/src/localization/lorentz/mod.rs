@@ -266,14 +266,19 @@ pub struct Lorentz {
     pub restart_shortfall: Option<f64>,
     /// When the restarts and the coarse search's starts find no trusted answer either, the
     /// untrusted answer among theirs that fits clearly most of the current points (8 in 100
-    /// more than the first answer, as a coarse start's must, and than any other kept) is the
-    /// match's answer in place of the untrusted first, both finished on a sparse scan: still
-    /// untrusted, but where the scans fit best. Where the scans overlap too little for any
-    /// answer to be trusted, a first answer that slid away from a guess 20 cm / 10° off fits a
-    /// sixth of the points while a coarse start's fits a third, and is right (Belgioioso's
-    /// pair 89). Seeds 1–60 of `twin matchers`: the large guesses right on 78 more pairs of
-    /// 18,000, Belgioioso 5 and Edmonton 2, none fewer, no trusted answer changed. Not in the thesis; false (the default)
-    /// answers the first, and [`Lorentz::with_lines`] has true.
+    /// more than the first answer, as a coarse start's must, and than any other kept) and whose
+    /// surfaces face every way (a [`spread`](super::MatchQuality::spread) of at least the trust
+    /// rule's `hold_below_spread`) is the match's answer in place of the untrusted first, both
+    /// finished on a sparse scan: still untrusted, but where the scans fit best. Where the scans
+    /// overlap too little for any answer to be trusted, a first answer that slid away from a
+    /// guess 20 cm / 10° off fits a sixth of the points while a coarse start's fits a third, and
+    /// is right (Belgioioso's pair 89). Seeds 1–60 of `twin matchers`: the large guesses right
+    /// on 78 more pairs of 18,000, Belgioioso on 5 and Edmonton on 1, none fewer, no trusted
+    /// answer changed. Without the spread's test, the L-corridor's rows (`--world
+    /// worlds/l-corridor.toml`, seeds 1–5) lost 8 right answers of 6,000: along a corridor the
+    /// answer that fits most lies anywhere along it, and the first lies nearest the guess. Not
+    /// in the thesis; false (the default) answers the first, and [`Lorentz::with_lines`] has
+    /// true.
     pub untrusted_best: bool,
     /// For dense scans (as `dense_sigmas_m`), in the first σ pass of every schedule but the
     /// wide one, when the current scan looks clean ([`Thinning`]: few points far from both
@@ -489,7 +494,7 @@ impl ScanMatcher for Lorentz {
 
 /// With [`Lorentz::untrusted_best`], the rescue's untrusted answer that fits clearly most: more
 /// than [`COARSE_MARGIN`] beyond the untrusted first answer's share of the current points and
-/// beyond any answer kept here before.
+/// beyond any answer kept here before, its surfaces facing every way.
 struct BestUntrusted {
     /// The first answer's share.
     first_share: f64,
@@ -506,9 +511,13 @@ impl BestUntrusted {
             + COARSE_MARGIN
     }
 
-    /// Keeps `result` if it is untrusted and fits beyond [`floor`](Self::floor).
+    /// Keeps `result` if it is untrusted, its surfaces spread as the trust rule's hold test
+    /// asks ([`TrustRule::hold_below_spread`]), and it fits beyond [`floor`](Self::floor).
     fn offer(&mut self, rule: &TrustRule, result: &MatchResult) {
-        if !rule.trusts(&result.quality) && result.quality.inlier_share > self.floor() {
+        if !rule.trusts(&result.quality)
+            && result.quality.spread >= rule.hold_below_spread
+            && result.quality.inlier_share > self.floor()
+        {
             self.best = Some(*result);
         }
     }
