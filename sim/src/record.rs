@@ -206,6 +206,14 @@ impl TrustedJudged {
     }
 }
 
+/// The scan of `placed` (in order of stamp) taken at `stamp`, if any.
+fn placed_at(placed: &[Placed], stamp: Stamp) -> Option<&Placed> {
+    placed
+        .binary_search_by_key(&stamp, |p| p.stamp)
+        .ok()
+        .map(|i| &placed[i])
+}
+
 /// How far each trusted match of `placed` (in order, as a map builder placed them) lies from
 /// the truth, metres and radians: the motion it put between its reference scan and its scan
 /// (the estimate's: a trusted match sets it) against the true motion between them, `truth`
@@ -214,15 +222,9 @@ pub fn trusted_match_errors<'a>(
     placed: &'a [Placed],
     truth: impl Fn(Stamp) -> Option<Pose2> + 'a,
 ) -> impl Iterator<Item = (f64, f64)> + 'a {
-    let estimate = |stamp: Stamp| {
-        placed
-            .binary_search_by_key(&stamp, |p| p.stamp)
-            .ok()
-            .map(|i| placed[i].estimate)
-    };
     placed.iter().filter(|p| p.trusted).filter_map(move |p| {
         let reference = p.reference?;
-        let answered = estimate(reference)?.relative(&p.estimate);
+        let answered = placed_at(placed, reference)?.estimate.relative(&p.estimate);
         let true_motion = truth(reference)?.relative(&truth(p.stamp)?);
         let off = true_motion.relative(&answered);
         Some((off.x.hypot(off.y), off.theta.abs()))
@@ -240,18 +242,12 @@ pub fn held_across_match_errors<'a>(
     placed: &'a [Placed],
     truth: impl Fn(Stamp) -> Option<Pose2> + 'a,
 ) -> impl Iterator<Item = (f64, f64)> + 'a {
-    let mount = |stamp: Stamp| {
-        placed
-            .binary_search_by_key(&stamp, |p| p.stamp)
-            .ok()
-            .map(|i| placed[i].mount)
-    };
     placed
         .iter()
         .filter(|p| p.held_across)
         .filter_map(move |p| {
             let (found, reference) = (p.matched.as_ref()?, p.reference?);
-            let from = truth(reference)?.compose(&mount(reference)?);
+            let from = truth(reference)?.compose(&placed_at(placed, reference)?.mount);
             let true_motion = from.relative(&truth(p.stamp)?.compose(&p.mount));
             // Across the free direction: the free direction turned a quarter.
             let free = found.quality.free;

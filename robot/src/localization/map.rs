@@ -301,7 +301,7 @@ impl MapBuilder {
                 };
                 let trusted =
                     (result.converged || !self.config.require_converged) && usable(&result.pose);
-                // Trusted but for the hold along a corridor: the match across it and in
+                // Trusted across a corridor but not along it: the match across it and in
                 // heading, the odometry along it.
                 let across = (!trusted
                     && self.config.held_across
