@@ -239,6 +239,16 @@ impl TrustRule {
         })
     }
 
+    /// Whether a match of this quality would be trusted if the scans pinned it down more: it
+    /// passes every test of [`trusts`](Self::trusts) but σ (the scans' geometry, which no
+    /// start changes).
+    pub fn trusts_but_sigma(&self, q: &MatchQuality) -> bool {
+        self.trusts(&MatchQuality {
+            sigma: [0.0; 3],
+            ..*q
+        })
+    }
+
     /// Whether a match of this quality passes every test of [`trusts`](Self::trusts) but
     /// [`held`](MatchQuality::held): the scans hold it across its free direction and in
     /// heading, and leave it free along that direction (a corridor's advance).
@@ -1372,6 +1382,56 @@ mod tests {
             },
         ] {
             assert!(!rule.trusts_but_overlap(&other), "{other:?}");
+        }
+    }
+
+    /// Only σ can be set aside by `trusts_but_sigma`: an answer loose in heading (0.304°,
+    /// the rule's bound 0.3°) or across is so, one that also fits too few points, fits badly,
+    /// still travels or is not held is not.
+    #[test]
+    fn only_sigma_can_be_set_aside() {
+        let rule = TrustRule::default();
+        let good = MatchQuality {
+            inliers: 114,
+            inlier_share: 0.88,
+            rms_m: 0.0136,
+            sigma: [0.002, 0.002, 0.001],
+            sparse: true,
+            step: [0.006, 0.016],
+            spread: 0.59,
+            free: [1.0, 0.0],
+            held: true,
+            across_sigma: [0.002, 0.001],
+            across_step: [0.006, 0.016],
+        };
+        assert!(rule.trusts(&good) && rule.trusts_but_sigma(&good));
+        for loose in [[0.002, 0.002, 0.304f64.to_radians()], [0.002, 0.02, 0.001]] {
+            let loose = MatchQuality {
+                sigma: loose,
+                ..good
+            };
+            assert!(!rule.trusts(&loose) && rule.trusts_but_sigma(&loose));
+            for other in [
+                MatchQuality {
+                    inlier_share: 0.3,
+                    ..loose
+                },
+                MatchQuality {
+                    rms_m: 0.04,
+                    ..loose
+                },
+                MatchQuality {
+                    step: [0.04, 0.001],
+                    ..loose
+                },
+                MatchQuality {
+                    held: false,
+                    spread: 0.1,
+                    ..loose
+                },
+            ] {
+                assert!(!rule.trusts_but_sigma(&other), "{other:?}");
+            }
         }
     }
 

@@ -252,8 +252,9 @@ pub struct Lorentz {
     /// that too few of the current points fit (the scans overlap little), and the first of the
     /// restarts all come back to it: the other restarts and the coarse search are left out,
     /// and it is the answer. Its basin holds the guess's neighbourhood on both sides, and no
-    /// start finds a trusted answer where the scans overlap too little for one. Not in the
-    /// thesis; `None` (the default) runs every restart, and [`Lorentz::with_lines`] has
+    /// start finds a trusted answer where the scans overlap too little for one. With
+    /// [`RestartsAgree::sigma`], also when its only fault is σ, which the scans' geometry
+    /// sets and no start changes. Not in the thesis; `None` (the default) runs every restart, and [`Lorentz::with_lines`] has
     /// [`RESTARTS_AGREE`].
     pub restarts_agree: Option<RestartsAgree>,
     /// How much smaller a share of the current points than the untrusted first answer fits a
@@ -783,11 +784,13 @@ impl Lorentz {
                 first.quality.inlier_share - shortfall
             });
         best = best.filter(|(_, share)| *share > floor);
-        // With `restarts_agree`, for a first answer whose only fault is its overlap: how many
-        // restarts in a row from the first came back to it. Enough, and the rescue ends.
-        let agree = self
-            .restarts_agree
-            .filter(|_| rule.trusts_but_overlap(&first.quality));
+        // With `restarts_agree`, for a first answer whose only fault is its overlap (or σ):
+        // how many restarts in a row from the first came back to it. Enough, and the rescue
+        // ends.
+        let agree = self.restarts_agree.filter(|agree| {
+            rule.trusts_but_overlap(&first.quality)
+                || (agree.sigma && rule.trusts_but_sigma(&first.quality))
+        });
         let mut back = 0;
         let agreed = |back: usize| agree.is_some_and(|agree| back >= agree.restarts);
         let mut fallback = self.untrusted_best.then_some(BestUntrusted {
