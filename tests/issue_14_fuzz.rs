@@ -700,3 +700,38 @@ fn check_errors_point_at_their_key() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A scan whose beams wind round more than a turn is refused naming the scan; a full turn of
+/// 1° beams with the closing beam (361 of them) and a half-turn SICK scan are matched.
+#[test]
+fn twin_match_refuses_a_scan_that_winds_round() {
+    let scan = |n: usize, increment: f64| {
+        let ranges: Vec<String> = (0..n)
+            .map(|i| format!("{}", 2.0 + 0.01 * (i % 9) as f64))
+            .collect();
+        format!(
+            r#"{{"angle_min": -3.14, "angle_increment": {increment}, "range_max": 30, "ranges": [{}]}}"#,
+            ranges.join(", ")
+        )
+    };
+    let matcher = MatcherKind::LorentzLines.build();
+    let line = |reference: &str| {
+        let request = format!(
+            r#"{{"ref": {reference}, "cur": {}, "guess": [0, 0, 0]}}"#,
+            scan(361, 0.0087)
+        );
+        let reply = sim::commands::map::match_line(7, &request, matcher.as_ref());
+        serde_json::from_str::<serde_json::Value>(&reply).unwrap()
+    };
+    let wound = line(&scan(200_000, 0.0087));
+    let error = wound["error"].as_str().expect("an error");
+    assert!(
+        error.starts_with("line 7: ref: expected beams within a turn, found 200000 beams"),
+        "{error}"
+    );
+    for fine in [scan(361, 1f64.to_radians()), scan(361, 0.5f64.to_radians())] {
+        let reply = line(&fine);
+        assert!(reply.get("error").is_none(), "{reply}");
+        assert!(reply["x"].as_f64().is_some_and(f64::is_finite), "{reply}");
+    }
+}

@@ -325,18 +325,25 @@ pub fn read_mcap(bytes: &[u8], file: &str) -> Result<RecordedLog, LogError> {
                 }
                 let msg = reader.laser_scan().map_err(bad)?;
                 let range_max = f64::from(msg.range_max);
+                // The beams' fan: at most a turn (a closing beam on the first's bearing
+                // allowed), and beams apart unless there is only one.
+                let increment = f64::from(msg.angle_increment).abs();
+                let span = increment * msg.ranges.len().saturating_sub(1) as f64;
                 let plausible = range_max > 0.0
                     && range_max < 1e4
                     && msg.angle_increment.is_finite()
-                    && msg.angle_min.is_finite();
+                    && msg.angle_min.is_finite()
+                    && (increment > 0.0 || msg.ranges.len() <= 1)
+                    && span <= std::f64::consts::TAU + increment;
                 if !plausible {
                     return Err(malformed(format!(
-                        "message {} on {}: range_max {} m, angle_min {}, angle_increment {}: expected a positive range_max below 10 km and finite angles",
+                        "message {} on {}: range_max {} m, angle_min {}, angle_increment {}, {} beams: expected a positive range_max below 10 km, finite angles and beams apart within a turn",
                         n + 1,
                         channel.topic,
                         msg.range_max,
                         msg.angle_min,
-                        msg.angle_increment
+                        msg.angle_increment,
+                        msg.ranges.len()
                     )));
                 }
                 scan_frame.clone_from(&msg.header.frame_id);
@@ -537,6 +544,45 @@ mod tests {
             };
             assert_eq!(s.ranges, vec![1.0, 8.0, 8.0], "no returns are the maximum");
         }
+    }
+
+    /// A scan whose beams wind round more than a turn, or stand on one bearing, is refused
+    /// naming the message; a full turn with its closing beam is read.
+    #[test]
+    fn a_scan_that_winds_round_is_refused_by_message() {
+        let one_scan = |increment: f32, beams: usize| {
+            let mut out = std::io::Cursor::new(Vec::new());
+            let mut rec = Recorder::new(&mut out).unwrap();
+            rec.write(
+                "/scan",
+                Stamp::ZERO,
+                &LaserScanMsg {
+                    header: Header::new(Stamp::ZERO, "laser"),
+                    angle_min: -3.0,
+                    angle_max: 3.0,
+                    angle_increment: increment,
+                    time_increment: 0.0,
+                    scan_time: 0.1,
+                    range_min: 0.0,
+                    range_max: 8.0,
+                    ranges: vec![2.0; beams],
+                    intensities: vec![],
+                },
+            )
+            .unwrap();
+            rec.finish().unwrap();
+            read_mcap(&out.into_inner(), "w.mcap")
+        };
+        for (increment, beams) in [(1.0, 10), (0.0, 5), (1f32.to_radians(), 400)] {
+            let err = one_scan(increment, beams).unwrap_err().to_string();
+            assert!(
+                err.starts_with("w.mcap") && err.contains("message 1 on /scan"),
+                "{err}"
+            );
+            assert!(err.contains("beams apart within a turn"), "{err}");
+        }
+        let turn = one_scan(1f32.to_radians(), 361).unwrap();
+        assert_eq!(turn.scans(), 1);
     }
 
     #[test]

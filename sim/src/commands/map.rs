@@ -238,6 +238,16 @@ pub fn match_line(number: usize, line: &str, matcher: &dyn ScanMatcher) -> Strin
                 show(scan.angle_increment)
             ));
         }
+        // The beams' fan: at most a turn (a closing beam on the first's bearing allowed).
+        let span = increment * scan.ranges.len().saturating_sub(1) as f64;
+        if span > turn + increment {
+            return error(format!(
+                "{name}: expected beams within a turn, found {} beams {} rad apart ({:.1} turns)",
+                scan.ranges.len(),
+                show(scan.angle_increment),
+                span / turn
+            ));
+        }
         if !(scan.range_max > 0.0 && scan.range_max.is_finite()) {
             return error(format!(
                 "{name}.range_max: expected a positive number of metres, found {}",
