@@ -709,8 +709,9 @@ impl RestartsAgree {
 /// lost a right answer in 6,000 on the 1° pairs with 20 % outliers: an answer pulled 4 cm aside
 /// (its Gauss–Newton step) that both restarts came back near. Asked also of an answer whose
 /// only fault is σ (`sigma`, 2026-12-07), no answer of `twin matchers` moved over seeds 1–40
-/// (48,000 pairs a row) and no flag; the searches of the twin's 1° pairs without outliers fell
-/// by 0.7 %, Edmonton's by 1.1 %, the other rows' not at all.
+/// (12,000 pairs a row) and no flag; the searches of the twin's 1° pairs without outliers fell
+/// by 0.7 %, Edmonton's by 1.1 %, the other rows' not at all; in the held-out worlds one untrusted
+/// answer moved, from wrong to right (the L-corridor's 1° pairs, seeds 1–5).
 pub const RESTARTS_AGREE: RestartsAgree = RestartsAgree {
     restarts: 2,
     reach_m: 0.03,
