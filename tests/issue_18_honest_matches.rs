@@ -849,6 +849,41 @@ fn a_trusted_answer_far_from_the_guess_is_checked() {
     );
 }
 
+/// A trusted answer far from its guess whose surfaces face every way is not checked against
+/// the coarse search (`FAR_SLIDE_SPREAD`): a slide runs along a direction the surfaces leave
+/// free. On the large guesses' row of four seeds, no right answer is lost and no pair takes
+/// more searches than with every far answer checked, and checks are left out. (The answers
+/// that stay checked, along Freiburg 101's corridor, are
+/// `a_trusted_answer_far_from_the_guess_is_checked`'s.)
+#[test]
+fn a_far_answer_whose_surfaces_face_every_way_is_not_checked() {
+    use robot::localization::{FAR_SLIDE_SPREAD, Lorentz};
+    let gated = Lorentz::with_lines();
+    assert_eq!(gated.far_slide_spread, Some(FAR_SLIDE_SPREAD));
+    let every = Lorentz {
+        far_slide_spread: None,
+        ..Lorentz::with_lines()
+    };
+    let mut left_out = 0;
+    for seed in [1, 4, 7, 8] {
+        let sets = sets(150, seed);
+        let large = sets.last().expect("the large-guess row");
+        assert!(large.name.contains("20 cm"), "{}", large.name);
+        for (k, case) in large.cases.iter().enumerate() {
+            let a = gated.match_scans(&case.reference, &case.current, case.guess);
+            let b = every.match_scans(&case.reference, &case.current, case.guess);
+            let at = format!("seed {seed}, pair {k}");
+            assert!(
+                !is_right(large, case, &b) || is_right(large, case, &a),
+                "{at}: lost"
+            );
+            assert!(a.iterations <= b.iterations, "{at}: {a:?} against {b:?}");
+            left_out += usize::from(a.iterations < b.iterations);
+        }
+    }
+    assert!(left_out >= 10, "{left_out} checks left out");
+}
+
 /// From a guess 20 cm and 10° off, a line-assisted Lorentzian that tries its wide second
 /// schedule (σ 20 cm first) when its answer is untrusted, or fits loosely after going far, is
 /// right at least as often as without it on each of two seeds and more often over both; on the

@@ -17,10 +17,10 @@ mod settings;
 
 pub use settings::{
     CLEAN_PASS_ENOUGH, COARSE, CROWD_RATIO, DENSE_SIGMAS, EARLY_CONVERGENCE, FAR_SLIDE_M,
-    FIRST_MATCH_CONVERGENCE, FIRST_PASS_CONVERGENCE, FIRST_PASS_ENOUGH, FIRST_PASS_SURFACE_POINTS,
-    FIRST_PASS_THINNING, FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD,
-    MERGE_REACH, POLISH_MORE, QuickFinish, RESTART_SHORTFALL, RESTARTS, RESTARTS_AGREE,
-    RestartsAgree, SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH,
+    FAR_SLIDE_SPREAD, FIRST_MATCH_CONVERGENCE, FIRST_PASS_CONVERGENCE, FIRST_PASS_ENOUGH,
+    FIRST_PASS_SURFACE_POINTS, FIRST_PASS_THINNING, FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS,
+    LINE_RESIDUALS_SPREAD, MERGE_REACH, POLISH_MORE, QuickFinish, RESTART_SHORTFALL, RESTARTS,
+    RESTARTS_AGREE, RestartsAgree, SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH,
     SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_QUICK, SPARSE_SIGMAS, SPARSE_START, SlideCheck,
     StartRounds, THESIS_SIGMAS, Thinning, WIDE_SIGMAS,
 };
@@ -162,6 +162,13 @@ pub struct Lorentz {
     /// corridor's length along may have found a look-alike place. Not in the thesis; `None`
     /// (the default) leaves it out, and [`Lorentz::with_lines`] has [`FAR_SLIDE_M`].
     pub far_slide_m: Option<f64>,
+    /// With `far_slide_m`: only an answer whose inliers' surfaces spread less than this
+    /// ([`MatchQuality::spread`](super::MatchQuality::spread)) is checked. A slide to a
+    /// look-alike place runs along a direction the surfaces leave free; where they face every
+    /// way they hold the answer in every direction, and a trusted answer far from the guess
+    /// means the guess was far off. Not in the thesis; `None` (the default) checks every far
+    /// answer, and [`Lorentz::with_lines`] has [`FAR_SLIDE_SPREAD`].
+    pub far_slide_spread: Option<f64>,
     /// The σ schedule, metres, for scans whose beams lie closer than `dense_below_rad`
     /// (measured on the current scan, [`beam_step`](super::beam_step)) instead of `sigmas_m`.
     /// Not in the thesis; empty (the default) leaves it out, and [`Lorentz::with_lines`] has
@@ -353,6 +360,7 @@ impl Lorentz {
             restarts: RESTARTS.to_vec(),
             coarse: Some(COARSE),
             far_slide_m: Some(FAR_SLIDE_M),
+            far_slide_spread: Some(FAR_SLIDE_SPREAD),
             dense_sigmas_m: DENSE_SIGMAS.to_vec(),
             dense_below_rad: SPARSE_BEAM_STEP_RAD,
             line_residuals_spread: Some(LINE_RESIDUALS_SPREAD),
@@ -413,6 +421,7 @@ impl Default for Lorentz {
             restarts: Vec::new(),
             coarse: None,
             far_slide_m: None,
+            far_slide_spread: None,
             dense_sigmas_m: Vec::new(),
             dense_below_rad: 0.0,
             line_residuals_spread: None,
@@ -734,7 +743,10 @@ impl Lorentz {
             let slid = rule.trusts(&chosen.quality)
                 && self
                     .far_slide_m
-                    .is_some_and(|far| travelled.x.hypot(travelled.y) > far);
+                    .is_some_and(|far| travelled.x.hypot(travelled.y) > far)
+                && self
+                    .far_slide_spread
+                    .is_none_or(|below| chosen.quality.spread < below);
             let Some((window, _)) = self.coarse.as_ref().filter(|_| slid) else {
                 return chosen;
             };

@@ -761,6 +761,16 @@ pub const COARSE: (correlative::Window, usize) = (correlative::Window::WIDE, 3);
 /// starts, one more or two.
 pub const FAR_SLIDE_M: f64 = 0.5;
 
+/// Below what spread of its surfaces a trusted answer farther than [`FAR_SLIDE_M`] from the
+/// guess is checked ([`Lorentz::far_slide_spread`]): 0.4, twice the hold test's. Over seeds
+/// 1–20 of `twin matchers` (2026-12-07), 553 answers of the large guesses' row were checked and
+/// 26 replaced: 25 at a spread of 0.31 or less (along Freiburg 101's corridor 0.01–0.06), one at
+/// 0.75 moved 3.8 cm. Checked only below 0.4, 385 checks are left out, that answer stays where
+/// it was, and no other moves; held out on seeds 21–40, no answer moves; the row's searches
+/// −1.1 % and −1.2 %, and its time more (each check's coarse search costs about 25 searches'
+/// time): the race's whole row 1.084 → 1.024 and 0.943 → 0.916 on seeds 1 and 3.
+pub const FAR_SLIDE_SPREAD: f64 = 0.4;
+
 /// How much larger a share of the current points a coarse start's trusted answer must fit than
 /// the untrusted first answer to replace it. The coarse search looks up to 60 cm and 30° away,
 /// where a corridor offers look-alike places: on Edmonton's sparse scans, without a margin,
