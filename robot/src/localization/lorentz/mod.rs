@@ -261,8 +261,8 @@ pub struct Lorentz {
     /// and it is the answer. Its basin holds the guess's neighbourhood on both sides, and no
     /// start finds a trusted answer where the scans overlap too little for one. With
     /// [`RestartsAgree::sigma`], also when its only fault is σ, which the scans' geometry
-    /// sets and no start changes. Not in the thesis; `None` (the default) runs every restart, and [`Lorentz::with_lines`] has
-    /// [`RESTARTS_AGREE`].
+    /// sets and no start changes. Not in the thesis; `None` (the default) runs every restart,
+    /// and [`Lorentz::with_lines`] has [`RESTARTS_AGREE`].
     pub restarts_agree: Option<RestartsAgree>,
     /// How much smaller a share of the current points than the untrusted first answer fits a
     /// restart's trusted answer may fit and still replace it (and so may the wide schedule's,
