@@ -51,4 +51,6 @@ pub use matcher::{
 pub use mbicp::Mbicp;
 pub use plicp::{GiveUp, PointToLine};
 pub use quality::{MatchQuality, TrustRule, polish};
-pub use scan::{RangeScan, SPARSE_BEAM_STEP_RAD, ScanPoints, beam_step, beam_step_below};
+pub use scan::{
+    RangeScan, SPARSE_BEAM_STEP_RAD, ScanPoints, beam_step, beam_step_below, fan_within_a_turn,
+};

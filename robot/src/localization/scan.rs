@@ -132,6 +132,15 @@ pub(super) fn turn_between(a: [f64; 2], b: [f64; 2]) -> f64 {
         .abs()
 }
 
+/// Whether `beams` beams `increment` radians apart (either sign) fan out within a turn: a
+/// closing beam on the first one's bearing allowed, and the beams apart unless there is only
+/// one. A scan that winds round more than once, or stands on one bearing, is malformed.
+pub fn fan_within_a_turn(increment: f64, beams: usize) -> bool {
+    let step = increment.abs();
+    let span = step * beams.saturating_sub(1) as f64;
+    (step > 0.0 || beams <= 1) && span <= std::f64::consts::TAU + step
+}
+
 /// The angle between a scan's neighbouring beams: the median, over points of consecutive
 /// beams, of the angle between them seen from the laser (one arctangent of their cross and dot
 /// products). `None` with no two such points.

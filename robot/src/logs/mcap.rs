@@ -13,7 +13,7 @@
 
 use super::{LogError, LogEvent, LogFormat, RecordedLog};
 use crate::geometry::Pose2;
-use crate::localization::RangeScan;
+use crate::localization::{RangeScan, fan_within_a_turn};
 use crate::logs::ros2::{CdrReader, Ros2Message, TransformStamped};
 use crate::time::Stamp;
 use std::collections::BTreeMap;
@@ -325,16 +325,11 @@ pub fn read_mcap(bytes: &[u8], file: &str) -> Result<RecordedLog, LogError> {
                 }
                 let msg = reader.laser_scan().map_err(bad)?;
                 let range_max = f64::from(msg.range_max);
-                // The beams' fan: at most a turn (a closing beam on the first's bearing
-                // allowed), and beams apart unless there is only one.
-                let increment = f64::from(msg.angle_increment).abs();
-                let span = increment * msg.ranges.len().saturating_sub(1) as f64;
                 let plausible = range_max > 0.0
                     && range_max < 1e4
                     && msg.angle_increment.is_finite()
                     && msg.angle_min.is_finite()
-                    && (increment > 0.0 || msg.ranges.len() <= 1)
-                    && span <= std::f64::consts::TAU + increment;
+                    && fan_within_a_turn(f64::from(msg.angle_increment), msg.ranges.len());
                 if !plausible {
                     return Err(malformed(format!(
                         "message {} on {}: range_max {} m, angle_min {}, angle_increment {}, {} beams: expected a positive range_max below 10 km, finite angles and beams apart within a turn",

@@ -238,9 +238,8 @@ pub fn match_line(number: usize, line: &str, matcher: &dyn ScanMatcher) -> Strin
                 show(scan.angle_increment)
             ));
         }
-        // The beams' fan: at most a turn (a closing beam on the first's bearing allowed).
-        let span = increment * scan.ranges.len().saturating_sub(1) as f64;
-        if span > turn + increment {
+        if !robot::localization::fan_within_a_turn(increment, scan.ranges.len()) {
+            let span = increment * scan.ranges.len().saturating_sub(1) as f64;
             return error(format!(
                 "{name}: expected beams within a turn, found {} beams {} rad apart ({:.1} turns)",
                 scan.ranges.len(),
