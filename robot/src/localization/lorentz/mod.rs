@@ -35,6 +35,7 @@ use super::scan::{SPARSE_BEAM_STEP_RAD, ScanPoints, beam_step_below};
 use crate::geometry::Pose2;
 use passes::{Assist, Visits};
 use settings::{COARSE_MARGIN, WIDE_AFTER};
+use std::cell::Cell;
 
 /// The Lorentzian matcher.
 ///
@@ -206,6 +207,13 @@ pub struct Lorentz {
     /// (the default) asks `line_residuals_spread` of every search, and
     /// [`Lorentz::with_lines`] has [`FIRST_SPREAD`].
     pub first_spread: Option<f64>,
+    /// With `first_spread`: whether the loose answer's second match runs even when every
+    /// search of the first would have counted its line pairs' residuals the same way with
+    /// `line_residuals_spread`, the line normals' spread never between the two shares. That
+    /// match then makes the same searches and steps as the first and ends on its answer, to
+    /// the bit, so `false` (every constructor's) leaves it out; `true` only shows that leaving
+    /// it out changes no answer.
+    pub rematch_alike: bool,
     /// For dense scans (as `dense_sigmas_m`), in every schedule but the wide one: when, in the
     /// last search of the first σ pass, at least this share (`.1`) of the current points were
     /// paired within this distance (`.0`, metres) of their targets, the narrower passes are
@@ -366,6 +374,7 @@ impl Lorentz {
             line_residuals_spread: Some(LINE_RESIDUALS_SPREAD),
             sparse_line_residuals_spread: Some(SPARSE_LINE_RESIDUALS_SPREAD),
             first_spread: Some(FIRST_SPREAD),
+            rematch_alike: false,
             first_max_steps: Some(FIRST_STEPS),
             first_pass_enough: Some(FIRST_PASS_ENOUGH),
             clean_pass_enough: Some(CLEAN_PASS_ENOUGH),
@@ -427,6 +436,7 @@ impl Default for Lorentz {
             line_residuals_spread: None,
             sparse_line_residuals_spread: None,
             first_spread: None,
+            rematch_alike: false,
             first_max_steps: None,
             first_pass_enough: None,
             clean_pass_enough: None,
@@ -647,6 +657,11 @@ impl Lorentz {
         let spread = self.spread_for(dense);
         let first_spread = self.first_spread.filter(|_| dense && spread.is_some());
         let mut lines = self.assist(grown, first_spread.or(spread));
+        // Whether every search of the first match would have decided as it did with `spread`:
+        // then the loose answer's second match (below) would be the first again, to the bit.
+        if let Some(assist) = lines.as_mut().filter(|_| first_spread.is_some()) {
+            assist.compare = spread;
+        }
         let sigmas = self.schedule_for(dense);
         let crowd = self.crowd_ratio.filter(|_| dense);
         let first_steps = self.first_max_steps.unwrap_or(self.max_steps);
@@ -669,11 +684,15 @@ impl Lorentz {
         // From here on every match asks the scan's own share of the spread
         // (`line_residuals_spread`, or `sparse_line_residuals_spread` on a sparse scan). A loose
         // first answer is matched again so, and that answer is kept unless the first fits
-        // clearly more points.
+        // clearly more points; not when that match would be the first again
+        // ([`Lorentz::rematch_alike`]).
+        let same_again =
+            !self.rematch_alike && lines.as_ref().is_some_and(|assist| assist.alike.get());
         if let Some(assist) = &mut lines {
             assist.spread = spread;
+            assist.compare = None;
         }
-        if first_spread.is_some() && first.quality.inlier_share < self.wide_below {
+        if first_spread.is_some() && first.quality.inlier_share < self.wide_below && !same_again {
             let again = self.passes(
                 (sigmas, first_steps, crowd, true),
                 scans,
@@ -920,6 +939,8 @@ impl Lorentz {
             lines,
             margin: params.end_margin_m,
             spread,
+            compare: None,
+            alike: Cell::new(true),
         })
     }
 

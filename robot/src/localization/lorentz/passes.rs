@@ -9,6 +9,7 @@ use crate::localization::lines::LazyLines;
 use crate::localization::matcher::{MatchResult, Reference, transform_all};
 use crate::localization::quality::{TrustRule, polish_near};
 use crate::localization::scan::ScanPoints;
+use std::cell::Cell;
 
 /// The pairs of one search by the reference point they share, for [`Lorentz::crowd_ratio`].
 struct Crowding {
@@ -80,6 +81,12 @@ pub(super) struct Assist<'a> {
     pub(super) lines: &'a LazyLines<'a>,
     pub(super) margin: f64,
     pub(super) spread: Option<f64>,
+    /// Another share for `spread`, asked of every search beside it: `alike` stays set while
+    /// each search would have counted its line pairs' residuals the same way with it. Then
+    /// passes run again with that share, from the same start, would make the same searches
+    /// and steps and end on the same answer, to the bit ([`Lorentz::first_spread`]).
+    pub(super) compare: Option<f64>,
+    pub(super) alike: Cell<bool>,
 }
 
 /// Where the earlier starts of one match ended their σ passes and what each answered, for
@@ -137,7 +144,19 @@ fn looks_clean(xy: &[[f64; 2]], thinning: &Thinning) -> bool {
 
 /// Whether unit normals `normals` spread enough for point-to-line residuals: the smaller
 /// eigenvalue of `Σ n nᵀ` at least `share` of the larger (none: no).
+#[cfg(test)]
 fn normals_spread(normals: &[Normal], share: f64) -> bool {
+    spreads(normals_eigen(normals), share)
+}
+
+/// Whether normals whose `Σ n nᵀ` has the eigenvalues `(small, large)` spread by `share`, as
+/// [`normals_spread`] decides.
+fn spreads((small, large): (f64, f64), share: f64) -> bool {
+    large > 0.0 && small >= share * large
+}
+
+/// The smaller and the larger eigenvalue of `Σ n nᵀ` over the unit normals `normals`.
+fn normals_eigen(normals: &[Normal]) -> (f64, f64) {
     let (mut xx, mut xy, mut yy) = (0.0, 0.0, 0.0);
     for n in normals.iter().flatten() {
         xx += n[0] * n[0];
@@ -146,8 +165,7 @@ fn normals_spread(normals: &[Normal], share: f64) -> bool {
     }
     let half_trace = 0.5 * (xx + yy);
     let radius = (0.25 * (xx - yy) * (xx - yy) + xy * xy).sqrt();
-    let (small, large) = (half_trace - radius, half_trace + radius);
-    large > 0.0 && small >= share * large
+    (half_trace - radius, half_trace + radius)
 }
 
 impl Lorentz {
@@ -310,9 +328,19 @@ impl Lorentz {
                     break;
                 }
                 let before = phi;
-                let to_lines = lines
-                    .and_then(|assist| assist.spread)
-                    .is_some_and(|share| normals_spread(&normals, share));
+                let to_lines = lines.is_some_and(|assist| {
+                    let Some(share) = assist.spread else {
+                        return false;
+                    };
+                    let eigen = normals_eigen(&normals);
+                    let to_lines = spreads(eigen, share);
+                    if let Some(other) = assist.compare
+                        && spreads(eigen, other) != to_lines
+                    {
+                        assist.alike.set(false);
+                    }
+                    to_lines
+                });
                 let normals = to_lines.then_some(normals.as_slice());
                 phi = self.nlm((&sources, &targets), normals, phi, (sigma, steps));
                 let step = Pose2::new(
