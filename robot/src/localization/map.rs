@@ -38,7 +38,7 @@ pub struct MapConfig {
     /// The share of a motion odometry may get wrong. Default 0.5.
     pub correction_share: f64,
     /// Only a match flagged [`converged`](MatchResult::converged) (its quality passes the
-    /// [`TrustRule`](super::TrustRule)) is used; any other falls back to odometry and is counted
+    /// [`TrustRule`]) is used; any other falls back to odometry and is counted
     /// in [`MatchStats::fallbacks`]. Default true.
     pub require_converged: bool,
     /// A match the trust rule refuses only along its free direction (a corridor whose advance

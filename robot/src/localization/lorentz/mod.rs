@@ -641,14 +641,16 @@ impl Lorentz {
     }
 
     /// The match from `guess`: the σ passes, and when their answer is loose or untrusted the
-    /// wide schedule, the restarts and the coarse search's starts; `dense` as
-    /// [`Lorentz::is_dense`] says of `current`, `last` as in [`Lorentz::passes`], `grown` the
-    /// reference's lines ([`LazyLines`]) when the matcher has `lines`. With `untrusted_best`,
-    /// when the rescue kept no trusted answer, its untrusted answer that fits clearly most
-    /// ([`BestUntrusted`]) is left in `untrusted`, for after the finish.
+    /// wide schedule ([`Lorentz::widened`]), then either the check of a trusted answer far
+    /// from the guess ([`Lorentz::far_checked`]) or the rescue of an untrusted one
+    /// ([`Lorentz::rescued`]); `dense` as [`Lorentz::is_dense`] says of `current`, `last` as in
+    /// [`Lorentz::passes`], `grown` the reference's lines ([`LazyLines`]) when the matcher has
+    /// `lines`. With `untrusted_best`, when the rescue kept no trusted answer, its untrusted
+    /// answer that fits clearly most ([`BestUntrusted`]) is left in `untrusted`, for after the
+    /// finish.
     fn match_from(
         &self,
-        (reference, current): (&Reference, &ScanPoints),
+        scans: (&Reference, &ScanPoints),
         grown: Option<&LazyLines>,
         dense: bool,
         guess: Pose2,
@@ -665,7 +667,6 @@ impl Lorentz {
         let sigmas = self.schedule_for(dense);
         let crowd = self.crowd_ratio.filter(|_| dense);
         let first_steps = self.first_max_steps.unwrap_or(self.max_steps);
-        let scans = (reference, current);
         // Every answer is judged by `passes`, by the rule `align` applies, so it carries its
         // quality and `align` does not judge it again.
         let mut first = self.passes(
@@ -712,6 +713,45 @@ impl Lorentz {
         if !more {
             return first;
         }
+        let (first, best) = self.widened(scans, lines.as_ref(), dense, guess, first, last);
+        // Past the first match and the wide schedule, the pairs are held to their projections
+        // (the product form): started away from the guess and free to slide along the walls,
+        // a match can settle in a look-alike place that the trust rule accepts.
+        if let Some(assist) = &mut lines {
+            assist.spread = None;
+        }
+        if self.restarts.is_empty() || rule.trusts(&first.quality) {
+            let chosen = best.map_or(first, |(result, _)| MatchResult {
+                iterations: first.iterations,
+                ..result
+            });
+            return self.far_checked(scans, lines.as_ref(), dense, guess, chosen, last);
+        }
+        self.rescued(
+            scans,
+            lines.as_ref(),
+            dense,
+            (guess, first, best),
+            (last, untrusted),
+        )
+    }
+
+    /// The first match's answer `first` from `guess`, and the wide schedule's when `first` is
+    /// untrusted, or trusted but loose (under `wide_below`) after going far (more than
+    /// [`WIDE_AFTER`]) on a scan dense by its beams, or any with [`Lorentz::sparse_loose_wide`]: the
+    /// wide answer replaces `first` when trusted and fitting more points; trusted but fitting
+    /// fewer than an untrusted `first`, it is returned beside it with its share, for the
+    /// rescue to weigh. `first`'s iterations count the wide schedule's.
+    fn widened(
+        &self,
+        scans: (&Reference, &ScanPoints),
+        lines: Option<&Assist>,
+        dense: bool,
+        guess: Pose2,
+        mut first: MatchResult,
+        last: &mut [Option<LastNearest>],
+    ) -> (MatchResult, Option<(MatchResult, f64)>) {
+        let rule = TrustRule::default();
         let trusted = rule.trusts(&first.quality);
         let travelled = guess.relative(&first.pose);
         let far =
@@ -726,13 +766,13 @@ impl Lorentz {
         let loose_wide = || {
             self.sparse_loose_wide
                 || dense
-                || beam_step_below(current, self.dense_below_rad) == Some(true)
+                || beam_step_below(scans.1, self.dense_below_rad) == Some(true)
         };
         if !self.wide_sigmas_m.is_empty() && (!trusted || (loose && far && loose_wide())) {
             let wide = self.passes(
                 (&self.wide_sigmas_m, self.max_steps, None, false),
                 scans,
-                lines.as_ref(),
+                lines,
                 guess,
                 last,
                 None,
@@ -751,49 +791,68 @@ impl Lorentz {
             }
         }
         first.iterations = iterations;
-        if self.restarts.is_empty() || rule.trusts(&first.quality) {
-            let chosen = best.map_or(first, |(result, _)| MatchResult {
-                iterations,
-                ..result
-            });
-            // Trusted far from the guess: checked against the coarse search's best start, its
-            // pairs held to their projections as the restarts' are (below).
-            let travelled = guess.relative(&chosen.pose);
-            let slid = rule.trusts(&chosen.quality)
-                && self
-                    .far_slide_m
-                    .is_some_and(|far| travelled.x.hypot(travelled.y) > far)
-                && self
-                    .far_slide_spread
-                    .is_none_or(|below| chosen.quality.spread < below);
-            let Some((window, _)) = self.coarse.as_ref().filter(|_| slid) else {
-                return chosen;
-            };
-            if let Some(assist) = &mut lines {
-                assist.spread = None;
-            }
-            let floor = chosen.quality.inlier_share + COARSE_MARGIN;
-            let (found, more) = self.match_coarse_starts(
-                (sigmas, crowd),
-                scans,
-                lines.as_ref(),
-                (guess, window, 1),
-                floor,
-                (last, &mut Visits::default(), None),
-            );
-            let iterations = chosen.iterations + more;
-            return MatchResult {
-                iterations,
-                ..found.unwrap_or(chosen)
-            };
+        (first, best)
+    }
+
+    /// The answer `chosen`, trusted or without restarts to rescue it: when trusted more than
+    /// `far_slide_m` from `guess` with surfaces that spread less than `far_slide_spread`,
+    /// checked against the coarse search's best start ([`Lorentz::match_coarse_starts`]),
+    /// whose answer replaces it when trusted and fitting clearly more points
+    /// ([`COARSE_MARGIN`]); the iterations of both.
+    fn far_checked(
+        &self,
+        scans: (&Reference, &ScanPoints),
+        lines: Option<&Assist>,
+        dense: bool,
+        guess: Pose2,
+        chosen: MatchResult,
+        last: &mut [Option<LastNearest>],
+    ) -> MatchResult {
+        let rule = TrustRule::default();
+        let travelled = guess.relative(&chosen.pose);
+        let slid = rule.trusts(&chosen.quality)
+            && self
+                .far_slide_m
+                .is_some_and(|far| travelled.x.hypot(travelled.y) > far)
+            && self
+                .far_slide_spread
+                .is_none_or(|below| chosen.quality.spread < below);
+        let Some((window, _)) = self.coarse.as_ref().filter(|_| slid) else {
+            return chosen;
+        };
+        let floor = chosen.quality.inlier_share + COARSE_MARGIN;
+        let (found, more) = self.match_coarse_starts(
+            (self.schedule_for(dense), self.crowd_ratio.filter(|_| dense)),
+            scans,
+            lines,
+            (guess, window, 1),
+            floor,
+            (last, &mut Visits::default(), None),
+        );
+        let iterations = chosen.iterations + more;
+        MatchResult {
+            iterations,
+            ..found.unwrap_or(chosen)
         }
-        // Not trusted: start again from guesses around this one, and keep the trusted answer
-        // that fits best (most inliers), if any. Started away from the guess, the pairs are
-        // held to their projections (the product form): free to slide along the walls, a far
-        // start can settle in a look-alike place that the trust rule accepts.
-        if let Some(assist) = &mut lines {
-            assist.spread = None;
-        }
+    }
+
+    /// The rescue of the untrusted answer `first` from `guess`: the restarts (guesses around
+    /// this one), then, when none is trusted, the coarse search's starts; the trusted answer
+    /// that fits most (most inliers, `best` the wide schedule's kept beside `first`), else
+    /// `first`, with the iterations of all. With `untrusted_best` and nothing trusted, the
+    /// untrusted answer that fits clearly most is left in `untrusted`.
+    fn rescued(
+        &self,
+        scans: (&Reference, &ScanPoints),
+        lines: Option<&Assist>,
+        dense: bool,
+        (guess, first, mut best): (Pose2, MatchResult, Option<(MatchResult, f64)>),
+        (last, untrusted): (&mut [Option<LastNearest>], &mut Option<MatchResult>),
+    ) -> MatchResult {
+        let rule = TrustRule::default();
+        let sigmas = self.schedule_for(dense);
+        let crowd = self.crowd_ratio.filter(|_| dense);
+        let mut iterations = first.iterations;
         let mut keep = |result: MatchResult, floor: f64, best: &mut Option<(MatchResult, f64)>| {
             iterations += result.iterations;
             let share = result.quality.inlier_share;
@@ -836,7 +895,7 @@ impl Lorentz {
             let result = self.passes(
                 (sigmas, self.max_steps, crowd, false),
                 scans,
-                lines.as_ref(),
+                lines,
                 start,
                 last,
                 Some(&mut visits),
@@ -859,7 +918,7 @@ impl Lorentz {
             let (found, more) = self.match_coarse_starts(
                 (sigmas, crowd),
                 scans,
-                lines.as_ref(),
+                lines,
                 (guess, window, *count),
                 floor,
                 (last, &mut visits, fallback.as_mut()),

@@ -142,15 +142,15 @@ fn looks_clean(xy: &[[f64; 2]], thinning: &Thinning) -> bool {
     lonely as f64 <= thinning.most_lonely * xy.len() as f64
 }
 
-/// Whether unit normals `normals` spread enough for point-to-line residuals: the smaller
-/// eigenvalue of `Σ n nᵀ` at least `share` of the larger (none: no).
+/// Whether unit normals `normals` spread enough for point-to-line residuals, as [`spreads`]
+/// decides of their [`normals_eigen`].
 #[cfg(test)]
 fn normals_spread(normals: &[Normal], share: f64) -> bool {
     spreads(normals_eigen(normals), share)
 }
 
-/// Whether normals whose `Σ n nᵀ` has the eigenvalues `(small, large)` spread by `share`, as
-/// [`normals_spread`] decides.
+/// Whether normals whose `Σ n nᵀ` has the eigenvalues `(small, large)` spread enough for
+/// point-to-line residuals: the smaller at least `share` of the larger (none: no).
 fn spreads((small, large): (f64, f64), share: f64) -> bool {
     large > 0.0 && small >= share * large
 }
