@@ -16,13 +16,13 @@ mod passes;
 mod settings;
 
 pub use settings::{
-    CLEAN_PASS_ENOUGH, COARSE, CROWD_RATIO, DENSE_SIGMAS, EARLY_CONVERGENCE, FAR_SLIDE_M,
-    FAR_SLIDE_SPREAD, FIRST_MATCH_CONVERGENCE, FIRST_PASS_CONVERGENCE, FIRST_PASS_ENOUGH,
-    FIRST_PASS_SURFACE_POINTS, FIRST_PASS_THINNING, FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS,
-    LINE_RESIDUALS_SPREAD, MERGE_REACH, POLISH_MORE, QuickFinish, RESTART_SHORTFALL, RESTARTS,
-    RESTARTS_AGREE, RestartsAgree, SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH,
-    SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_QUICK, SPARSE_SIGMAS, SPARSE_START, SlideCheck,
-    StartRounds, THESIS_SIGMAS, Thinning, WIDE_SIGMAS,
+    CLEAN_PASS_ENOUGH, COARSE, COARSE_FIRST_BELOW, CROWD_RATIO, DENSE_SIGMAS, EARLY_CONVERGENCE,
+    FAR_SLIDE_M, FAR_SLIDE_SPREAD, FIRST_MATCH_CONVERGENCE, FIRST_PASS_CONVERGENCE,
+    FIRST_PASS_ENOUGH, FIRST_PASS_SURFACE_POINTS, FIRST_PASS_THINNING, FIRST_SPREAD,
+    FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD, MERGE_REACH, POLISH_MORE, QuickFinish,
+    RESTART_SHORTFALL, RESTARTS, RESTARTS_AGREE, RestartsAgree, SLIDE_CHECK,
+    SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH, SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_QUICK,
+    SPARSE_SIGMAS, SPARSE_START, SlideCheck, StartRounds, THESIS_SIGMAS, Thinning, WIDE_SIGMAS,
 };
 
 use super::correlative;
@@ -296,6 +296,19 @@ pub struct Lorentz {
     /// in the thesis; false (the default) answers the first, and [`Lorentz::with_lines`] has
     /// true.
     pub untrusted_best: bool,
+    /// On a dense scan, when the untrusted first answer fits less than this share of the
+    /// current points, the rescue runs the coarse search's starts before the restarts, and a
+    /// trusted answer of theirs (fitting 8 in 100 more of the points than the first, as a
+    /// coarse start's must) ends it. A first answer that fits so little says the guess is far
+    /// off, often in heading beyond the restarts' ±16°, where the coarse search's ±30° look:
+    /// from guesses σ 20 cm / 10° off, such pairs ran the eight restarts to nothing and then
+    /// found the answer from a coarse start, 500–1,100 searches in all. Seeds 1–40 of `twin
+    /// matchers`: the large guesses' searches −2.4 % and −2.5 %, 20 answers moved (every one
+    /// right both ways but one wrong and untrusted made right and trusted, and one wrong and
+    /// trusted left wrong and untrusted), every other row's answers the same. Not in the
+    /// thesis; `None` (the default) runs the restarts first, and [`Lorentz::with_lines`] has
+    /// [`COARSE_FIRST_BELOW`].
+    pub coarse_first_below: Option<f64>,
     /// For dense scans (as `dense_sigmas_m`), in the first σ pass of every schedule but the
     /// wide one, when the current scan looks clean ([`Thinning`]: few points far from both
     /// neighbours, as outliers are): its first searches pair every second current point only,
@@ -387,6 +400,7 @@ impl Lorentz {
             restarts_agree: Some(RESTARTS_AGREE),
             restart_shortfall: Some(RESTART_SHORTFALL),
             untrusted_best: true,
+            coarse_first_below: Some(COARSE_FIRST_BELOW),
             first_pass_thinning: Some(FIRST_PASS_THINNING),
             sparse_early_convergence: Some(SPARSE_EARLY_CONVERGENCE),
             sigmas_m: SPARSE_SIGMAS.to_vec(),
@@ -448,6 +462,7 @@ impl Default for Lorentz {
             restarts_agree: None,
             restart_shortfall: None,
             untrusted_best: false,
+            coarse_first_below: None,
             first_pass_thinning: None,
             sparse_early_convergence: None,
             sparse_finish: None,
@@ -837,7 +852,9 @@ impl Lorentz {
     }
 
     /// The rescue of the untrusted answer `first` from `guess`: the restarts (guesses around
-    /// this one), then, when none is trusted, the coarse search's starts; the trusted answer
+    /// this one), then, when none is trusted, the coarse search's starts (those first, a
+    /// trusted answer of theirs ending the rescue, for a dense `first` that fits under
+    /// [`Lorentz::coarse_first_below`]); the trusted answer
     /// that fits most (most inliers, `best` the wide schedule's kept beside `first`), else
     /// `first`, with the iterations of all. With `untrusted_best` and nothing trusted, the
     /// untrusted answer that fits clearly most is left in `untrusted`.
@@ -853,16 +870,6 @@ impl Lorentz {
         let sigmas = self.schedule_for(dense);
         let crowd = self.crowd_ratio.filter(|_| dense);
         let mut iterations = first.iterations;
-        let mut keep = |result: MatchResult, floor: f64, best: &mut Option<(MatchResult, f64)>| {
-            iterations += result.iterations;
-            let share = result.quality.inlier_share;
-            if rule.trusts(&result.quality)
-                && share > floor
-                && best.as_ref().is_none_or(|(_, s)| share > *s)
-            {
-                *best = Some((result, share));
-            }
-        };
         // The restarts and the coarse search's starts run one schedule: one that comes to where
         // an earlier one ended a pass takes its answer.
         let mut visits = Visits::default();
@@ -887,6 +894,43 @@ impl Lorentz {
             first_share: first.quality.inlier_share,
             best: None,
         });
+        let coarse_floor = first.quality.inlier_share + COARSE_MARGIN;
+        // A first answer that fits very little: the coarse search's starts first.
+        let coarse_first = self
+            .coarse
+            .as_ref()
+            .filter(|_| {
+                dense
+                    && self
+                        .coarse_first_below
+                        .is_some_and(|below| first.quality.inlier_share < below)
+            })
+            .map(|(window, count)| {
+                let (found, more) = self.match_coarse_starts(
+                    (sigmas, crowd),
+                    scans,
+                    lines,
+                    (guess, window, *count),
+                    coarse_floor,
+                    (last, &mut visits, fallback.as_mut()),
+                );
+                iterations += more;
+                found
+            });
+        if let Some(Some(mut found)) = coarse_first {
+            found.iterations = iterations;
+            return found;
+        }
+        let mut keep = |result: MatchResult, floor: f64, best: &mut Option<(MatchResult, f64)>| {
+            iterations += result.iterations;
+            let share = result.quality.inlier_share;
+            if rule.trusts(&result.quality)
+                && share > floor
+                && best.as_ref().is_none_or(|(_, s)| share > *s)
+            {
+                *best = Some((result, share));
+            }
+        };
         for (tried, offset) in self.restarts.iter().enumerate() {
             if agreed(back) {
                 break;
@@ -912,15 +956,15 @@ impl Lorentz {
         // points than the first (unless the restarts agreed with it).
         if best.is_none()
             && !agreed(back)
+            && coarse_first.is_none()
             && let Some((window, count)) = &self.coarse
         {
-            let floor = first.quality.inlier_share + COARSE_MARGIN;
             let (found, more) = self.match_coarse_starts(
                 (sigmas, crowd),
                 scans,
                 lines,
                 (guess, window, *count),
-                floor,
+                coarse_floor,
                 (last, &mut visits, fallback.as_mut()),
             );
             iterations += more;

@@ -742,6 +742,11 @@ pub const RESTARTS_AGREE: RestartsAgree = RestartsAgree {
 ///   answers of Edmonton and the large guesses no longer trusted.
 pub const RESTART_SHORTFALL: f64 = 0.05;
 
+/// The share of the current points under which an untrusted first answer of
+/// [`Lorentz::with_lines`] on a dense scan has the coarse search's starts tried before the
+/// restarts ([`Lorentz::coarse_first_below`]): a quarter, half the trust rule's least share.
+pub const COARSE_FIRST_BELOW: f64 = 0.25;
+
 /// The coarse search of [`Lorentz::with_lines`]: ±60 cm and ±30° around the guess
 /// ([`correlative::Window::WIDE`]), its three best headings at least 3° apart. From guesses
 /// σ 20 cm / 10° off the corrected real logs it raised the right answers from 0.9267 to 0.9303
