@@ -907,44 +907,46 @@ impl Lorentz {
             first_share: first.quality.inlier_share,
             best: None,
         });
-        let coarse_floor = first.quality.inlier_share + COARSE_MARGIN;
-        // A first answer that fits very little: the coarse search's starts first.
-        let coarse_first = self
-            .coarse
-            .as_ref()
-            .filter(|_| {
-                dense
-                    && self
-                        .coarse_first_below
-                        .is_some_and(|below| first.quality.inlier_share < below)
-            })
-            .map(|(window, count)| {
-                let (found, more, agree) = self.match_coarse_starts(
+        // The coarse search's starts, whose answers must fit clearly more points than the
+        // first (none without `coarse`).
+        let coarse_starts = |last: &mut [Option<LastNearest>],
+                             visits: &mut Visits,
+                             fallback: Option<&mut BestUntrusted>| {
+            self.coarse.as_ref().map(|(window, count)| {
+                self.match_coarse_starts(
                     (sigmas, crowd),
                     scans,
                     lines,
                     (guess, window, *count),
-                    coarse_floor,
-                    (last, &mut visits, fallback.as_mut()),
-                );
-                iterations += more;
-                (found, agree)
-            });
-        match coarse_first {
-            Some((Some(mut found), _)) => {
+                    first.quality.inlier_share + COARSE_MARGIN,
+                    (last, visits, fallback),
+                )
+            })
+        };
+        // A dense first answer that fits very little: the coarse search's starts first.
+        let coarse_first = dense
+            && self
+                .coarse_first_below
+                .is_some_and(|below| first.quality.inlier_share < below);
+        let mut coarse_tried = false;
+        if coarse_first
+            && let Some((found, more, agree)) = coarse_starts(last, &mut visits, fallback.as_mut())
+        {
+            coarse_tried = true;
+            iterations += more;
+            if let Some(mut found) = found {
                 found.iterations = iterations;
                 return found;
             }
             // The coarse starts agree on one place, and it cannot be trusted: the restarts,
             // nearer the guess, are not asked.
-            Some((None, true)) if self.coarse_agreement_ends => {
+            if agree && self.coarse_agreement_ends {
                 *untrusted = fallback.and_then(|l| l.best);
                 return MatchResult {
                     iterations,
                     ..first
                 };
             }
-            _ => {}
         }
         let mut keep = |result: MatchResult, floor: f64, best: &mut Option<(MatchResult, f64)>| {
             iterations += result.iterations;
@@ -977,21 +979,13 @@ impl Lorentz {
             }
             keep(result, floor, &mut best);
         }
-        // Still nothing: the coarse search's starts, whose answers must fit clearly more
-        // points than the first (unless the restarts agreed with it).
+        // Still nothing: the coarse search's starts (unless the restarts agreed with the first,
+        // or they ran before the restarts).
         if best.is_none()
             && !agreed(back)
-            && coarse_first.is_none()
-            && let Some((window, count)) = &self.coarse
+            && !coarse_tried
+            && let Some((found, more, _)) = coarse_starts(last, &mut visits, fallback.as_mut())
         {
-            let (found, more, _) = self.match_coarse_starts(
-                (sigmas, crowd),
-                scans,
-                lines,
-                (guess, window, *count),
-                coarse_floor,
-                (last, &mut visits, fallback.as_mut()),
-            );
             iterations += more;
             best = found.map(|result| {
                 let share = result.quality.inlier_share;
