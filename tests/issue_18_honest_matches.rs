@@ -2941,6 +2941,59 @@ fn an_answer_loose_only_in_sigma_ends_its_rescue_when_the_restarts_come_back() {
     );
 }
 
+/// Any two restarts that come back to an answer whose only fault is its overlap (or σ) end
+/// its rescue, not only the first two in their order (`RestartsAgree::in_turn` false): where
+/// one of the first restarts slides off to a place that fits little, Belgioioso's pair 89
+/// (the robot beside a wall) ran all eight and the coarse search's starts too. On the real rows
+/// of seeds 5–6: no pair takes more searches, none right with the first two in turn is wrong,
+/// no more wrong answers are trusted, and every row but Freiburg 101's (whose rescues find
+/// trusted answers) spares searches.
+#[test]
+fn any_two_restarts_that_come_back_end_the_rescue() {
+    use robot::localization::{Lorentz, RESTARTS_AGREE, RestartsAgree};
+    const { assert!(!RESTARTS_AGREE.in_turn) };
+    let any = Lorentz::with_lines();
+    let in_turn = Lorentz {
+        restarts_agree: Some(RestartsAgree {
+            in_turn: true,
+            ..RESTARTS_AGREE
+        }),
+        ..Lorentz::with_lines()
+    };
+    let mut rows: Vec<(String, usize, usize)> = Vec::new();
+    for seed in 5..=6 {
+        for set in sets(300, seed)
+            .iter()
+            .filter(|s| s.name.starts_with("real"))
+        {
+            let (mut trusted_wrong, mut saved) = ([0; 2], 0);
+            for (pair, case) in set.cases.iter().enumerate() {
+                let a = any.match_scans(&case.reference, &case.current, case.guess);
+                let b = in_turn.match_scans(&case.reference, &case.current, case.guess);
+                let at = format!("seed {seed}, {} pair {pair}", set.name);
+                assert!(a.iterations <= b.iterations, "{at}: {a:?} against {b:?}");
+                let (right_a, right_b) = (is_right(set, case, &a), is_right(set, case, &b));
+                assert!(right_a || !right_b, "{at}: {a:?} against {b:?}");
+                trusted_wrong[0] += usize::from(a.converged && !right_a);
+                trusted_wrong[1] += usize::from(b.converged && !right_b);
+                saved += (b.iterations - a.iterations) as usize;
+            }
+            assert!(
+                trusted_wrong[0] <= trusted_wrong[1],
+                "seed {seed}, {}: wrong answers trusted {trusted_wrong:?}",
+                set.name
+            );
+            rows.push((set.name.clone(), seed as usize, saved));
+        }
+    }
+    assert_eq!(rows.len(), 8, "{rows:?}");
+    for (row, seed, saved) in &rows {
+        if !row.contains("freiburg") {
+            assert!(*saved >= 100, "seed {seed}, {row}: {saved} searches saved");
+        }
+    }
+}
+
 /// A loose first answer's second match is left out when every search of the first would have
 /// counted its line pairs' residuals the same way with the second's share
 /// (`Lorentz::rematch_alike` false): on every standard row, seeds 1–2, every answer and flag is
@@ -2991,11 +3044,19 @@ fn a_second_match_that_would_repeat_the_first_is_left_out() {
 fn a_first_answer_that_fits_little_tries_the_coarse_starts_first() {
     use robot::localization::{COARSE_FIRST_BELOW, Lorentz};
     let log = repo().join("tests/data/corrected/freiburg-101-corrected.log.gz");
-    let coarse_first = Lorentz::with_lines();
-    assert_eq!(coarse_first.coarse_first_below, Some(COARSE_FIRST_BELOW));
+    assert_eq!(
+        Lorentz::with_lines().coarse_first_below,
+        Some(COARSE_FIRST_BELOW)
+    );
+    // Without the other reason to try the coarse starts first (`coarse_first_slid`), asked
+    // of Freiburg 101's corridor on its own below.
+    let coarse_first = Lorentz {
+        coarse_first_slid: false,
+        ..Lorentz::with_lines()
+    };
     let restarts_first = Lorentz {
         coarse_first_below: None,
-        ..Lorentz::with_lines()
+        ..coarse_first.clone()
     };
     let (mut right, mut right_before, mut wrong_trusted, mut wrong_trusted_before) = (0, 0, 0, 0);
     let (mut spared, mut saved) = (0, 0);
@@ -3030,6 +3091,56 @@ fn a_first_answer_that_fits_little_tries_the_coarse_starts_first() {
         right >= right_before && wrong_trusted <= wrong_trusted_before,
         "right {right} ({right_before} with the restarts first), wrong and trusted \
          {wrong_trusted} ({wrong_trusted_before})"
+    );
+    assert!(spared >= 2, "{spared} pairs spared, {saved} searches");
+}
+
+/// An untrusted first answer that slid far from the guess along the one direction its
+/// surfaces leave free (a corridor) has the coarse search's starts tried before the restarts,
+/// which slide along the corridor as it did (`Lorentz::coarse_first_slid`). On Freiburg 101's
+/// first 100 pairs from guesses σ 20 cm / 10° off, seeds 6 and 28 (its pair 44 among them,
+/// 1.8 m along its corridor, 730–840 searches with the restarts first): no pair right with the
+/// restarts first is wrong, no more wrong answers are trusted, no pair takes more searches,
+/// and at least two take hundreds fewer.
+#[test]
+fn a_first_answer_slid_along_a_corridor_tries_the_coarse_starts_first() {
+    use robot::localization::Lorentz;
+    let log = repo().join("tests/data/corrected/freiburg-101-corrected.log.gz");
+    let coarse_first = Lorentz::with_lines();
+    assert!(coarse_first.coarse_first_slid);
+    let restarts_first = Lorentz {
+        coarse_first_slid: false,
+        ..Lorentz::with_lines()
+    };
+    let large = matchers::GuessError {
+        sigma_m: 0.20,
+        sigma_rad: 10f64.to_radians(),
+    };
+    let (mut wrong_trusted, mut wrong_trusted_before) = (0, 0);
+    let (mut spared, mut saved) = (0, 0);
+    for seed in [6, 28] {
+        let set = matchers::log_set("large/freiburg-101", &log, 100, large, seed).expect("the log");
+        for (pair, case) in set.cases.iter().enumerate() {
+            let ok = |r: &robot::localization::MatchResult| {
+                let off = case.truth.relative(&r.pose);
+                off.x.hypot(off.y) <= set.tolerance_m && off.theta.abs() <= set.tolerance_rad
+            };
+            let a = coarse_first.match_scans(&case.reference, &case.current, case.guess);
+            let b = restarts_first.match_scans(&case.reference, &case.current, case.guess);
+            let at = format!("seed {seed}, pair {pair}: {a:?} against {b:?}");
+            assert!(ok(&a) || !ok(&b), "{at}");
+            assert!(a.iterations <= b.iterations, "{at}");
+            wrong_trusted += usize::from(a.converged && !ok(&a));
+            wrong_trusted_before += usize::from(b.converged && !ok(&b));
+            if b.iterations >= a.iterations + 300 {
+                spared += 1;
+                saved += b.iterations - a.iterations;
+            }
+        }
+    }
+    assert!(
+        wrong_trusted <= wrong_trusted_before,
+        "wrong and trusted {wrong_trusted} ({wrong_trusted_before} with the restarts first)"
     );
     assert!(spared >= 2, "{spared} pairs spared, {saved} searches");
 }
