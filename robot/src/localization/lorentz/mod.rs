@@ -323,9 +323,10 @@ pub struct Lorentz {
     /// farther than `far_slide_m` from the guess, its surfaces spread under `far_slide_spread`
     /// (the slide check's test, asked of trusted answers by `far_slide_m`), has the coarse
     /// search's starts tried before the restarts, as `coarse_first_below` does: a trusted
-    /// answer of theirs (or with `coarse_agreement_ends` their agreement) ends the rescue. Along a corridor the restarts (±8°, ±16°, ±15 cm
-    /// around the guess) slide to other places along it as the first did; the coarse search
-    /// scores every place of its window at once. From guesses σ 20 cm / 10° off, Freiburg 101's
+    /// answer of theirs (or with `coarse_agreement_ends` their agreement) ends the rescue.
+    /// Along a corridor the restarts (±8°, ±16°, ±15 cm around the guess) slide to other
+    /// places along it as the first did; the coarse search scores every place of its window
+    /// at once. From guesses σ 20 cm / 10° off, Freiburg 101's
     /// pair 44 ran 730–840 searches, the first answer 1.8 m along its corridor: now 360–420.
     /// Seeds 1–60 of `twin matchers`: only the large guesses' row moved (and one Freiburg 101
     /// answer, wrong both ways); searches −1.5 to −2.4 % there, no pair more, 23 answers moved,
