@@ -2962,28 +2962,25 @@ fn any_two_restarts_that_come_back_end_the_rescue() {
     };
     let mut rows: Vec<(String, usize, usize)> = Vec::new();
     for seed in 5..=6 {
-        for set in sets(300, seed)
-            .iter()
-            .filter(|s| s.name.starts_with("real"))
-        {
-            let (mut trusted_wrong, mut saved) = ([0; 2], 0);
-            for (pair, case) in set.cases.iter().enumerate() {
-                let a = any.match_scans(&case.reference, &case.current, case.guess);
-                let b = in_turn.match_scans(&case.reference, &case.current, case.guess);
-                let at = format!("seed {seed}, {} pair {pair}", set.name);
-                assert!(a.iterations <= b.iterations, "{at}: {a:?} against {b:?}");
-                let (right_a, right_b) = (is_right(set, case, &a), is_right(set, case, &b));
-                assert!(right_a || !right_b, "{at}: {a:?} against {b:?}");
-                trusted_wrong[0] += usize::from(a.converged && !right_a);
-                trusted_wrong[1] += usize::from(b.converged && !right_b);
-                saved += (b.iterations - a.iterations) as usize;
-            }
+        // Per real row: wrong answers trusted (either matcher) and searches saved.
+        let mut tally: BTreeMap<String, ([usize; 2], usize)> = BTreeMap::new();
+        let real = every_pair_of(|name| name.starts_with("real"));
+        each_pair_taken_side_by_side([&any, &in_turn], (&[seed], 300), real, |set, c, [a, b]| {
+            let at = format!("seed {seed}, {}", set.name);
+            assert!(a.iterations <= b.iterations, "{at}: {a:?} against {b:?}");
+            let (right_a, right_b) = (is_right(set, c, a), is_right(set, c, b));
+            assert!(right_a || !right_b, "{at}: {a:?} against {b:?}");
+            let (trusted_wrong, saved) = tally.entry(set.name.clone()).or_default();
+            trusted_wrong[0] += usize::from(a.converged && !right_a);
+            trusted_wrong[1] += usize::from(b.converged && !right_b);
+            *saved += (b.iterations - a.iterations) as usize;
+        });
+        for (row, (trusted_wrong, saved)) in tally {
             assert!(
                 trusted_wrong[0] <= trusted_wrong[1],
-                "seed {seed}, {}: wrong answers trusted {trusted_wrong:?}",
-                set.name
+                "seed {seed}, {row}: wrong answers trusted {trusted_wrong:?}"
             );
-            rows.push((set.name.clone(), seed as usize, saved));
+            rows.push((row, seed as usize, saved));
         }
     }
     assert_eq!(rows.len(), 8, "{rows:?}");
@@ -3033,6 +3030,33 @@ fn a_second_match_that_would_repeat_the_first_is_left_out() {
     );
 }
 
+/// Two matchers side by side on the first 100 pairs of the corrected log `log`
+/// (`tests/data/corrected/LOG-corrected.log.gz`) from guesses σ 20 cm / 10° off, for each of
+/// `seeds`: each pair's place ("seed S, pair P"), its two answers and whether each is right
+/// handed to `visit`.
+fn each_large_guess_pair_side_by_side(
+    log: &str,
+    seeds: &[u64],
+    matchers: [&robot::localization::Lorentz; 2],
+    mut visit: impl FnMut(&str, [&robot::localization::MatchResult; 2], [bool; 2]),
+) {
+    let path = repo().join(format!("tests/data/corrected/{log}-corrected.log.gz"));
+    let large = matchers::GuessError {
+        sigma_m: 0.20,
+        sigma_rad: 10f64.to_radians(),
+    };
+    for &seed in seeds {
+        let set =
+            matchers::log_set(&format!("large/{log}"), &path, 100, large, seed).expect("the log");
+        for (pair, case) in set.cases.iter().enumerate() {
+            let [a, b] =
+                matchers.map(|m| m.match_scans(&case.reference, &case.current, case.guess));
+            let right = [&a, &b].map(|r| is_right(&set, case, r));
+            visit(&format!("seed {seed}, pair {pair}"), [&a, &b], right);
+        }
+    }
+}
+
 /// A dense first answer that fits under a quarter of the current points says the guess is far
 /// off, often in heading beyond the restarts' ±16°: the coarse search's starts run before the
 /// restarts, and a trusted answer of theirs ends the rescue (`Lorentz::coarse_first_below`).
@@ -3043,7 +3067,6 @@ fn a_second_match_that_would_repeat_the_first_is_left_out() {
 #[test]
 fn a_first_answer_that_fits_little_tries_the_coarse_starts_first() {
     use robot::localization::{COARSE_FIRST_BELOW, Lorentz};
-    let log = repo().join("tests/data/corrected/freiburg-101-corrected.log.gz");
     assert_eq!(
         Lorentz::with_lines().coarse_first_below,
         Some(COARSE_FIRST_BELOW)
@@ -3060,33 +3083,18 @@ fn a_first_answer_that_fits_little_tries_the_coarse_starts_first() {
     };
     let (mut right, mut right_before, mut wrong_trusted, mut wrong_trusted_before) = (0, 0, 0, 0);
     let (mut spared, mut saved) = (0, 0);
-    let large = matchers::GuessError {
-        sigma_m: 0.20,
-        sigma_rad: 10f64.to_radians(),
-    };
-    for seed in [13, 18] {
-        let set = matchers::log_set("large/freiburg-101", &log, 100, large, seed).expect("the log");
-        for (pair, case) in set.cases.iter().enumerate() {
-            let ok = |r: &robot::localization::MatchResult| {
-                let off = case.truth.relative(&r.pose);
-                off.x.hypot(off.y) <= set.tolerance_m && off.theta.abs() <= set.tolerance_rad
-            };
-            let a = coarse_first.match_scans(&case.reference, &case.current, case.guess);
-            let b = restarts_first.match_scans(&case.reference, &case.current, case.guess);
-            assert!(
-                ok(&a) || !ok(&b),
-                "seed {seed}, pair {pair}: {a:?} against {b:?}"
-            );
-            right += usize::from(ok(&a));
-            right_before += usize::from(ok(&b));
-            wrong_trusted += usize::from(a.converged && !ok(&a));
-            wrong_trusted_before += usize::from(b.converged && !ok(&b));
-            if b.iterations >= a.iterations + 300 {
-                spared += 1;
-                saved += b.iterations - a.iterations;
-            }
+    let matchers = [&coarse_first, &restarts_first];
+    each_large_guess_pair_side_by_side("freiburg-101", &[13, 18], matchers, |at, [a, b], ok| {
+        assert!(ok[0] || !ok[1], "{at}: {a:?} against {b:?}");
+        right += usize::from(ok[0]);
+        right_before += usize::from(ok[1]);
+        wrong_trusted += usize::from(a.converged && !ok[0]);
+        wrong_trusted_before += usize::from(b.converged && !ok[1]);
+        if b.iterations >= a.iterations + 300 {
+            spared += 1;
+            saved += b.iterations - a.iterations;
         }
-    }
+    });
     assert!(
         right >= right_before && wrong_trusted <= wrong_trusted_before,
         "right {right} ({right_before} with the restarts first), wrong and trusted \
@@ -3105,39 +3113,26 @@ fn a_first_answer_that_fits_little_tries_the_coarse_starts_first() {
 #[test]
 fn a_first_answer_slid_along_a_corridor_tries_the_coarse_starts_first() {
     use robot::localization::Lorentz;
-    let log = repo().join("tests/data/corrected/freiburg-101-corrected.log.gz");
     let coarse_first = Lorentz::with_lines();
     assert!(coarse_first.coarse_first_slid);
     let restarts_first = Lorentz {
         coarse_first_slid: false,
         ..Lorentz::with_lines()
     };
-    let large = matchers::GuessError {
-        sigma_m: 0.20,
-        sigma_rad: 10f64.to_radians(),
-    };
     let (mut wrong_trusted, mut wrong_trusted_before) = (0, 0);
     let (mut spared, mut saved) = (0, 0);
-    for seed in [6, 28] {
-        let set = matchers::log_set("large/freiburg-101", &log, 100, large, seed).expect("the log");
-        for (pair, case) in set.cases.iter().enumerate() {
-            let ok = |r: &robot::localization::MatchResult| {
-                let off = case.truth.relative(&r.pose);
-                off.x.hypot(off.y) <= set.tolerance_m && off.theta.abs() <= set.tolerance_rad
-            };
-            let a = coarse_first.match_scans(&case.reference, &case.current, case.guess);
-            let b = restarts_first.match_scans(&case.reference, &case.current, case.guess);
-            let at = format!("seed {seed}, pair {pair}: {a:?} against {b:?}");
-            assert!(ok(&a) || !ok(&b), "{at}");
-            assert!(a.iterations <= b.iterations, "{at}");
-            wrong_trusted += usize::from(a.converged && !ok(&a));
-            wrong_trusted_before += usize::from(b.converged && !ok(&b));
-            if b.iterations >= a.iterations + 300 {
-                spared += 1;
-                saved += b.iterations - a.iterations;
-            }
+    let matchers = [&coarse_first, &restarts_first];
+    each_large_guess_pair_side_by_side("freiburg-101", &[6, 28], matchers, |at, [a, b], ok| {
+        let at = format!("{at}: {a:?} against {b:?}");
+        assert!(ok[0] || !ok[1], "{at}");
+        assert!(a.iterations <= b.iterations, "{at}");
+        wrong_trusted += usize::from(a.converged && !ok[0]);
+        wrong_trusted_before += usize::from(b.converged && !ok[1]);
+        if b.iterations >= a.iterations + 300 {
+            spared += 1;
+            saved += b.iterations - a.iterations;
         }
-    }
+    });
     assert!(
         wrong_trusted <= wrong_trusted_before,
         "wrong and trusted {wrong_trusted} ({wrong_trusted_before} with the restarts first)"
@@ -3154,24 +3149,19 @@ fn a_first_answer_slid_along_a_corridor_tries_the_coarse_starts_first() {
 #[test]
 fn coarse_starts_that_agree_on_an_untrusted_place_end_the_rescue() {
     use robot::localization::Lorentz;
-    let log = repo().join("tests/data/corrected/belgioioso-corrected.log.gz");
     let ending = Lorentz::with_lines();
     assert!(ending.coarse_agreement_ends);
     let running = Lorentz {
         coarse_agreement_ends: false,
         ..Lorentz::with_lines()
     };
-    let large = matchers::GuessError {
-        sigma_m: 0.20,
-        sigma_rad: 10f64.to_radians(),
-    };
     let (mut spared, mut saved) = (0, 0);
-    for seed in 1..=5 {
-        let set = matchers::log_set("large/belgioioso", &log, 100, large, seed).expect("the log");
-        for (pair, case) in set.cases.iter().enumerate() {
-            let a = ending.match_scans(&case.reference, &case.current, case.guess);
-            let b = running.match_scans(&case.reference, &case.current, case.guess);
-            let at = format!("seed {seed}, pair {pair}");
+    let seeds = [1, 2, 3, 4, 5];
+    each_large_guess_pair_side_by_side(
+        "belgioioso",
+        &seeds,
+        [&ending, &running],
+        |at, [a, b], _| {
             assert_eq!(a.pose, b.pose, "{at}");
             assert_eq!(a.quality, b.quality, "{at}");
             assert_eq!(a.converged, b.converged, "{at}");
@@ -3180,8 +3170,8 @@ fn coarse_starts_that_agree_on_an_untrusted_place_end_the_rescue() {
                 spared += 1;
                 saved += b.iterations - a.iterations;
             }
-        }
-    }
+        },
+    );
     assert!(
         spared >= 3 && saved >= 1000,
         "{spared} pairs, {saved} searches spared"
