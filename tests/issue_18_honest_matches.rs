@@ -379,8 +379,9 @@ fn twin_matchers_prints_the_table() {
 }
 
 /// `twin matchers --seeds 2` pools two seeds into each row: its `pairs.csv` and `closures.csv`
-/// are the two single-seed runs' one after the other (each line names its seed), and a row's
-/// pairs and successes are the two runs' summed. `--seeds 0` is refused by name.
+/// are the two single-seed runs' one after the other (each line names its seed), a row's
+/// pairs and successes are the two runs' summed, and its seed-by-seed median errors are the two
+/// runs' medians (printed under the table). `--seeds 0` is refused by name.
 #[test]
 fn twin_matchers_pools_seeds_into_its_rows() {
     let out = tempfile_dir("twin-matchers-seeds");
@@ -424,7 +425,21 @@ fn twin_matchers_pools_seeds_into_its_rows() {
         assert!((right(row) - right(one) - right(two)).abs() < 1e-9, "{row}");
         let triangles = |r: &serde_json::Value| r["closure"]["triangles"].as_u64().unwrap_or(0);
         assert_eq!(triangles(row), triangles(one) + triangles(two), "{row}");
+        // The seeds' own medians, lowest and highest: each single run's median.
+        let median = |r: &serde_json::Value| r["error_m"][0].as_f64().unwrap();
+        let (low, high) = (median(one).min(median(two)), median(one).max(median(two)));
+        assert_eq!(
+            row["error_by_seed_m"],
+            serde_json::json!([low, high]),
+            "{row}"
+        );
+        assert!(one["error_by_seed_m"].is_null() && two["error_by_seed_m"].is_null());
     }
+    // Printed under the table with several seeds, not with one.
+    let header = "median error of one seed's pairs: lowest – highest";
+    assert!(String::from_utf8_lossy(&both.stdout).contains(header));
+    let (one, ..) = run(&["--seed", "1"], "one-again");
+    assert!(one.status.success() && !String::from_utf8_lossy(&one.stdout).contains(header));
     let (bad, ..) = run(&["--seeds", "0"], "bad");
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--seeds must be between 1 and 1000"));

@@ -228,6 +228,10 @@ pub struct Row {
     pub error_m: [f64; 2],
     /// Median and 95th percentile of the rotation error, radians.
     pub error_rad: [f64; 2],
+    /// With the pairs of several seeds pooled: the lowest and the highest of the seeds' own
+    /// median translation errors, metres (each seed's pairs alone, as `--seeds 1` from that
+    /// seed gives them). The pooled median hides how far one run of the row's pairs can stray.
+    pub error_by_seed_m: Option<[f64; 2]>,
     /// Median time per pair (preparing the reference included), microseconds.
     pub median_us: f64,
     /// Share of pairs flagged `converged`.
@@ -463,6 +467,8 @@ pub struct Tally {
     matcher: MatcherKind,
     errors_m: Vec<f64>,
     errors_rad: Vec<f64>,
+    /// Each pooled seed's own median translation error, metres, in the order pooled.
+    seed_medians_m: Vec<f64>,
     micros: Vec<f64>,
     success: usize,
     flagged: usize,
@@ -478,6 +484,7 @@ impl Tally {
         debug_assert!(self.set == other.set && self.matcher == other.matcher);
         self.errors_m.extend(other.errors_m);
         self.errors_rad.extend(other.errors_rad);
+        self.seed_medians_m.extend(other.seed_medians_m);
         self.micros.extend(other.micros);
         self.success += other.success;
         self.flagged += other.flagged;
@@ -505,6 +512,15 @@ impl Tally {
             success: self.success as f64 / n,
             error_m: median_p95(&mut self.errors_m),
             error_rad: median_p95(&mut self.errors_rad),
+            error_by_seed_m: (self.seed_medians_m.len() > 1).then(|| {
+                let fold = |f: fn(f64, f64) -> f64, start| {
+                    self.seed_medians_m.iter().copied().fold(start, f)
+                };
+                [
+                    fold(f64::min, f64::INFINITY),
+                    fold(f64::max, f64::NEG_INFINITY),
+                ]
+            }),
             median_us: quantile(&mut self.micros, 0.5),
             flagged: self.flagged as f64 / n,
             flag_precision: share(self.flagged_success, self.flagged),
@@ -532,6 +548,7 @@ pub fn tally(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Matche
                 matcher: kind,
                 errors_m: Vec::with_capacity(set.cases.len()),
                 errors_rad: Vec::with_capacity(set.cases.len()),
+                seed_medians_m: Vec::with_capacity(1),
                 micros: Vec::with_capacity(set.cases.len()),
                 success: 0,
                 flagged: 0,
@@ -595,6 +612,10 @@ pub fn tally(set: &CaseSet, kinds: &[MatcherKind], record: &mut dyn FnMut(Matche
                     skip: result.pose,
                 }));
             }
+            if !tally.errors_m.is_empty() {
+                let median = quantile(&mut tally.errors_m.clone(), 0.5);
+                tally.seed_medians_m.push(median);
+            }
             tally
         })
         .collect()
@@ -655,6 +676,28 @@ pub fn table(rows: &[Row]) -> String {
         ));
     }
     out
+}
+
+/// With several seeds pooled: each row's lowest and highest median translation error of one
+/// seed's pairs alone ([`Row::error_by_seed_m`]) as a Markdown table; `None` with one seed.
+pub fn seed_table(rows: &[Row]) -> Option<String> {
+    let mut out = String::from(
+        "| pairs | matcher | median error of one seed's pairs: lowest – highest |\n|---|---|---|\n",
+    );
+    let mut any = false;
+    for r in rows {
+        if let Some([low, high]) = r.error_by_seed_m {
+            any = true;
+            out.push_str(&format!(
+                "| {} | {} | {:.2} – {:.2} mm |\n",
+                r.set,
+                r.matcher,
+                low * 1e3,
+                high * 1e3
+            ));
+        }
+    }
+    any.then_some(out)
 }
 
 /// The beams of the synthetic rows' sparse scans: the LMS in its 1° mode, 181 over 180°, as
@@ -1172,6 +1215,9 @@ pub fn main(args: MatchersArgs) -> Result<(), CommandError> {
         .chain(outcomes.iter().map(Outcome::csv))
         .collect();
     say!("{}", table(&rows));
+    if let Some(seeds) = seed_table(&rows) {
+        say!("{seeds}");
+    }
     if !raw_rows.is_empty() {
         say!("{}", raw_table(&raw_rows));
     }
@@ -1229,6 +1275,7 @@ mod tests {
             success: 0.0,
             error_m: [0.0; 2],
             error_rad: [0.0; 2],
+            error_by_seed_m: None,
             median_us: 1.0,
             flagged: 0.0,
             flag_precision: 1.0,
