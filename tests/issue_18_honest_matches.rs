@@ -3072,6 +3072,49 @@ fn each_large_guess_pair_side_by_side(
     }
 }
 
+/// What [`rescue_side_by_side`] counts of two matchers' answers: each one's right answers and
+/// wrong trusted ones, and the pairs the first matched in 300 searches or more fewer (and the
+/// searches it saved there).
+struct RescueTally {
+    right: [usize; 2],
+    wrong_trusted: [usize; 2],
+    spared: u32,
+    saved: u32,
+}
+
+/// [`each_large_guess_pair_side_by_side`] for a rescue changed in the first matcher: it
+/// asserts that no pair right with the second is wrong with the first (and, with
+/// `no_more_searches`, that none takes the first more searches), and tallies the rest.
+fn rescue_side_by_side(
+    log: &str,
+    seeds: &[u64],
+    matchers: [&robot::localization::Lorentz; 2],
+    no_more_searches: bool,
+) -> RescueTally {
+    let mut tally = RescueTally {
+        right: [0; 2],
+        wrong_trusted: [0; 2],
+        spared: 0,
+        saved: 0,
+    };
+    each_large_guess_pair_side_by_side(log, seeds, matchers, |at, [a, b], ok| {
+        let at = format!("{at}: {a:?} against {b:?}");
+        assert!(ok[0] || !ok[1], "{at}");
+        if no_more_searches {
+            assert!(a.iterations <= b.iterations, "{at}");
+        }
+        for (k, r) in [a, b].into_iter().enumerate() {
+            tally.right[k] += usize::from(ok[k]);
+            tally.wrong_trusted[k] += usize::from(r.converged && !ok[k]);
+        }
+        if b.iterations >= a.iterations + 300 {
+            tally.spared += 1;
+            tally.saved += b.iterations - a.iterations;
+        }
+    });
+    tally
+}
+
 /// A dense first answer that fits under a quarter of the current points says the guess is far
 /// off, often in heading beyond the restarts' ±16°: the coarse search's starts run before the
 /// restarts, and a trusted answer of theirs ends the rescue (`Lorentz::coarse_first_below`).
@@ -3096,20 +3139,13 @@ fn a_first_answer_that_fits_little_tries_the_coarse_starts_first() {
         coarse_first_below: None,
         ..coarse_first.clone()
     };
-    let (mut right, mut right_before, mut wrong_trusted, mut wrong_trusted_before) = (0, 0, 0, 0);
-    let (mut spared, mut saved) = (0, 0);
     let matchers = [&coarse_first, &restarts_first];
-    each_large_guess_pair_side_by_side("freiburg-101", &[13, 18], matchers, |at, [a, b], ok| {
-        assert!(ok[0] || !ok[1], "{at}: {a:?} against {b:?}");
-        right += usize::from(ok[0]);
-        right_before += usize::from(ok[1]);
-        wrong_trusted += usize::from(a.converged && !ok[0]);
-        wrong_trusted_before += usize::from(b.converged && !ok[1]);
-        if b.iterations >= a.iterations + 300 {
-            spared += 1;
-            saved += b.iterations - a.iterations;
-        }
-    });
+    let RescueTally {
+        right: [right, right_before],
+        wrong_trusted: [wrong_trusted, wrong_trusted_before],
+        spared,
+        saved,
+    } = rescue_side_by_side("freiburg-101", &[13, 18], matchers, false);
     assert!(
         right >= right_before && wrong_trusted <= wrong_trusted_before,
         "right {right} ({right_before} with the restarts first), wrong and trusted \
@@ -3134,20 +3170,13 @@ fn a_first_answer_slid_along_a_corridor_tries_the_coarse_starts_first() {
         coarse_first_slid: false,
         ..Lorentz::with_lines()
     };
-    let (mut wrong_trusted, mut wrong_trusted_before) = (0, 0);
-    let (mut spared, mut saved) = (0, 0);
     let matchers = [&coarse_first, &restarts_first];
-    each_large_guess_pair_side_by_side("freiburg-101", &[6, 28], matchers, |at, [a, b], ok| {
-        let at = format!("{at}: {a:?} against {b:?}");
-        assert!(ok[0] || !ok[1], "{at}");
-        assert!(a.iterations <= b.iterations, "{at}");
-        wrong_trusted += usize::from(a.converged && !ok[0]);
-        wrong_trusted_before += usize::from(b.converged && !ok[1]);
-        if b.iterations >= a.iterations + 300 {
-            spared += 1;
-            saved += b.iterations - a.iterations;
-        }
-    });
+    let RescueTally {
+        wrong_trusted: [wrong_trusted, wrong_trusted_before],
+        spared,
+        saved,
+        ..
+    } = rescue_side_by_side("freiburg-101", &[6, 28], matchers, true);
     assert!(
         wrong_trusted <= wrong_trusted_before,
         "wrong and trusted {wrong_trusted} ({wrong_trusted_before} with the restarts first)"

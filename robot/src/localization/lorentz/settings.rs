@@ -705,9 +705,10 @@ impl RestartsAgree {
 
 /// The agreement of [`Lorentz::with_lines`]: two of the restarts ([`Lorentz::restarts`]) come
 /// back to within 3 cm and 0.5°, under a third of the real logs' line of success (10 cm, 2°).
-/// Asked first (2026-12-03) of the first two (the guess turned by ±8°): from guesses σ 20 cm / 10° off the corrected real logs, and on
-/// the logs' consecutive pairs, the right answers of `twin matchers` stayed the same over seeds
-/// 1–40 (47,640 real pairs) and so did every flag; 54 answers moved, by 30 mm at most. With
+/// Asked first (2026-12-03) of the first two (the guess turned by ±8°): from guesses σ 20 cm /
+/// 10° off the corrected real logs, and on the logs' consecutive pairs, the right answers of
+/// `twin matchers` stayed the same over seeds 1–40 (47,640 real pairs) and so did every flag;
+/// 54 answers moved, by 30 mm at most. With
 /// [`MERGE_REACH`] the searches of Belgioioso's pairs fell by a quarter, Edmonton's by
 /// 13–14 %. Asked of any untrusted answer (not only one whose only fault is its overlap), it
 /// lost a right answer in 6,000 on the 1° pairs with 20 % outliers: an answer pulled 4 cm aside
