@@ -19,10 +19,11 @@ pub use settings::{
     CLEAN_PASS_ENOUGH, COARSE, COARSE_FIRST_BELOW, CROWD_RATIO, DENSE_SIGMAS, EARLY_CONVERGENCE,
     FAR_SLIDE_M, FAR_SLIDE_SPREAD, FIRST_MATCH_CONVERGENCE, FIRST_PASS_CONVERGENCE,
     FIRST_PASS_ENOUGH, FIRST_PASS_SURFACE_POINTS, FIRST_PASS_THINNING, FIRST_SPREAD,
-    FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD, MERGE_REACH, POLISH_MORE, QuickFinish,
-    RESTART_SHORTFALL, RESTARTS, RESTARTS_AGREE, RestartsAgree, SLIDE_CHECK,
-    SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH, SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_QUICK,
-    SPARSE_SIGMAS, SPARSE_START, SlideCheck, StartRounds, THESIS_SIGMAS, Thinning, WIDE_SIGMAS,
+    FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD, LONELY_PASS_ENOUGH, LonelyEnough,
+    MERGE_REACH, POLISH_MORE, QuickFinish, RESTART_SHORTFALL, RESTARTS, RESTARTS_AGREE,
+    RestartsAgree, SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH,
+    SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_QUICK, SPARSE_SIGMAS, SPARSE_START, SlideCheck,
+    StartRounds, THESIS_SIGMAS, Thinning, WIDE_SIGMAS,
 };
 
 use super::correlative;
@@ -227,6 +228,16 @@ pub struct Lorentz {
     /// move it. Not in the thesis; `None` (the default) asks `first_pass_enough` of every
     /// scan, and [`Lorentz::with_lines`] has [`CLEAN_PASS_ENOUGH`].
     pub clean_pass_enough: Option<(f64, f64)>,
+    /// `first_pass_enough` for a dense scan that does not look clean (the test of
+    /// `first_pass_thinning`, which it needs): its share counted over the current points that
+    /// are not lonely, when the first pass's last search's line normals spread as
+    /// [`LonelyEnough`] says; a match whose narrower passes that leaves out (and the count over
+    /// every point would not) takes more polish rounds. A lonely point (an outlier out to
+    /// 32 m) is never within the distance of its target, so counted over every point the share
+    /// asks four in five of the others on a scan with 20 % outliers. Not in the thesis; `None`
+    /// (the default) counts every point, and [`Lorentz::with_lines`] has
+    /// [`LONELY_PASS_ENOUGH`].
+    pub lonely_pass_enough: Option<LonelyEnough>,
     /// End a σ pass when a search brings the estimate back to within `convergence` (or
     /// `early_convergence`) of where it was two searches before: the searches alternate
     /// between two sets of pairs, and the estimate between two poses, so no later search would
@@ -415,6 +426,7 @@ impl Lorentz {
             first_max_steps: Some(FIRST_STEPS),
             first_pass_enough: Some(FIRST_PASS_ENOUGH),
             clean_pass_enough: Some(CLEAN_PASS_ENOUGH),
+            lonely_pass_enough: Some(LONELY_PASS_ENOUGH),
             stop_on_cycles: true,
             first_pass_surfaces: Some(FIRST_PASS_SURFACE_POINTS),
             early_convergence: Some(EARLY_CONVERGENCE),
@@ -480,6 +492,7 @@ impl Default for Lorentz {
             first_max_steps: None,
             first_pass_enough: None,
             clean_pass_enough: None,
+            lonely_pass_enough: None,
             stop_on_cycles: false,
             first_pass_surfaces: None,
             first_pass_convergence: None,

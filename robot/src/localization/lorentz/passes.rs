@@ -132,14 +132,24 @@ impl Visits {
 /// Whether at most `thinning.most_lonely` of the points `xy` (in beam order) lie farther than
 /// `thinning.lonely_m` from both their neighbours: a scan clean enough to be thinned. The first
 /// and last points, with one neighbour each, are never lonely.
+#[cfg(test)]
 fn looks_clean(xy: &[[f64; 2]], thinning: &Thinning) -> bool {
+    clean_with(lonely_points(xy, thinning), xy.len(), thinning)
+}
+
+/// Whether `lonely` points of `points` are few enough for the scan to look clean.
+fn clean_with(lonely: usize, points: usize, thinning: &Thinning) -> bool {
+    lonely as f64 <= thinning.most_lonely * points as f64
+}
+
+/// How many of the points `xy` (in beam order) lie farther than `thinning.lonely_m` from both
+/// their neighbours; the first and last never do.
+fn lonely_points(xy: &[[f64; 2]], thinning: &Thinning) -> usize {
     let far2 = thinning.lonely_m * thinning.lonely_m;
     let far = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) > far2;
-    let lonely = xy
-        .windows(3)
+    xy.windows(3)
         .filter(|w| far(w[1], w[0]) && far(w[1], w[2]))
-        .count();
-    lonely as f64 <= thinning.most_lonely * xy.len() as f64
+        .count()
 }
 
 /// Whether unit normals `normals` spread enough for point-to-line residuals, as [`spreads`]
@@ -208,10 +218,22 @@ impl Lorentz {
         // last search's pairs were.
         // Whether a dense scan looks clean (`first_pass_thinning`'s test), for the thinning and
         // `clean_pass_enough`.
-        let clean = crowd.is_some()
-            && self
-                .first_pass_thinning
-                .is_some_and(|thinning| looks_clean(&current.xy, &thinning));
+        let thinning_test = self.first_pass_thinning.filter(|_| crowd.is_some());
+        let lonely = thinning_test.map(|thinning| lonely_points(&current.xy, &thinning));
+        let clean = thinning_test
+            .zip(lonely)
+            .is_some_and(|(thinning, lonely)| clean_with(lonely, current.len(), &thinning));
+        // With `lonely_pass_enough` on a dense scan that does not look clean: the spread its
+        // line normals must reach, the polish rounds it adds, and the points not lonely.
+        let lonely_enough = self
+            .lonely_pass_enough
+            .filter(|_| !clean)
+            .zip(lonely)
+            .map(|(rule, lonely)| (rule, current.len() - lonely));
+        // Whether the last search's line normals spread as `lonely_enough` asks.
+        let mut normals_spread = false;
+        // Whether `lonely_enough` left the narrower passes out.
+        let mut lonely_left_out = false;
         let enough = self
             .clean_pass_enough
             .filter(|_| clean)
@@ -230,9 +252,19 @@ impl Lorentz {
         for (pass, &sigma) in sigmas.iter().enumerate() {
             if pass == 1
                 && let Some((_, share)) = enough
-                && close as f64 >= share * searched as f64
             {
-                break;
+                if close as f64 >= share * searched as f64 {
+                    break;
+                }
+                // Counted over the points that are not lonely (no thinning on such a scan:
+                // every point was searched).
+                if let Some((_, not_lonely)) = lonely_enough
+                    && normals_spread
+                    && close as f64 >= share * not_lonely as f64
+                {
+                    lonely_left_out = true;
+                    break;
+                }
             }
             if pass > 0 && pass + 1 == sigmas.len() && self.polish_rounds > 0 {
                 before_last = self
@@ -341,6 +373,9 @@ impl Lorentz {
                     }
                     to_lines
                 });
+                if let Some((rule, _)) = lonely_enough {
+                    normals_spread = spreads(normals_eigen(&normals), rule.spread);
+                }
                 let normals = to_lines.then_some(normals.as_slice());
                 phi = self.nlm((&sources, &targets), normals, phi, (sigma, steps));
                 let step = Pose2::new(
@@ -388,7 +423,11 @@ impl Lorentz {
         if self.polish_rounds > 0 {
             // The crowd rule marks a dense scan's schedules but the wide one, as above.
             let more = self.polish_more.filter(|_| crowd.is_some());
-            (result.pose, after_rounds) = self.polish(reference, current, result.pose, more, last);
+            let extra = lonely_enough
+                .filter(|_| lonely_left_out)
+                .map_or(0, |(rule, _)| rule.extra_polish_rounds);
+            (result.pose, after_rounds) =
+                self.polish(reference, current, result.pose, (more, extra), last);
         }
         let rule = TrustRule::default();
         result.quality = rule.assess_near(reference, &current.xy, &result.pose, Some(&mut *last));
@@ -403,7 +442,7 @@ impl Lorentz {
         // Set only with the polish.
         if let Some((phi, margin)) = before_last {
             let earlier = Pose2::new(phi[1], phi[2], phi[0]);
-            let (earlier, _) = self.polish(reference, current, earlier, None, last);
+            let (earlier, _) = self.polish(reference, current, earlier, (None, 0), last);
             let quality = rule.assess_near(reference, &current.xy, &earlier, Some(&mut *last));
             if quality.inlier_share > result.quality.inlier_share + margin {
                 (result.pose, result.quality) = (earlier, quality);
@@ -415,18 +454,18 @@ impl Lorentz {
         result
     }
 
-    /// The point-to-line polish of `pose`, `polish_rounds` rounds and, with `more`, those
-    /// [`polish_near`] adds: the polished pose, and the pose after `polish_rounds` where more
-    /// rounds moved it.
+    /// The point-to-line polish of `pose`, `polish_rounds` rounds and `extra` more, and, with
+    /// `more`, those [`polish_near`] adds: the polished pose, and the pose after those rounds
+    /// where more rounds moved it.
     fn polish(
         &self,
         reference: &Reference,
         current: &ScanPoints,
         pose: Pose2,
-        more: Option<(f64, usize)>,
+        (more, extra): (Option<(f64, usize)>, usize),
         last: &mut [Option<LastNearest>],
     ) -> (Pose2, Option<Pose2>) {
-        let rounds = (self.polish_rounds, 0.01, 0.05);
+        let rounds = (self.polish_rounds + extra, 0.01, 0.05);
         let (polished, after_rounds) =
             polish_near(reference, &current.xy, pose, rounds, more, last);
         let wrapped = |p: Pose2| Pose2::new(p.x, p.y, wrap_angle(p.theta));
