@@ -360,21 +360,24 @@ impl Lorentz {
                     break;
                 }
                 let before = phi;
-                let to_lines = lines.is_some_and(|assist| {
-                    let Some(share) = assist.spread else {
-                        return false;
-                    };
-                    let eigen = normals_eigen(&normals);
-                    let to_lines = spreads(eigen, share);
-                    if let Some(other) = assist.compare
-                        && spreads(eigen, other) != to_lines
-                    {
-                        assist.alike.set(false);
+                // The line normals' spread, once a search, for the shares asked of it.
+                let spread_share = lines.and_then(|assist| assist.spread);
+                let eigen = (spread_share.is_some() || lonely_enough.is_some())
+                    .then(|| normals_eigen(&normals));
+                let to_lines = match (lines, spread_share, eigen) {
+                    (Some(assist), Some(share), Some(eigen)) => {
+                        let to_lines = spreads(eigen, share);
+                        if let Some(other) = assist.compare
+                            && spreads(eigen, other) != to_lines
+                        {
+                            assist.alike.set(false);
+                        }
+                        to_lines
                     }
-                    to_lines
-                });
-                if let Some((rule, _)) = lonely_enough {
-                    normals_spread = spreads(normals_eigen(&normals), rule.spread);
+                    _ => false,
+                };
+                if let Some(((rule, _), eigen)) = lonely_enough.zip(eigen) {
+                    normals_spread = spreads(eigen, rule.spread);
                 }
                 let normals = to_lines.then_some(normals.as_slice());
                 phi = self.nlm((&sources, &targets), normals, phi, (sigma, steps));
