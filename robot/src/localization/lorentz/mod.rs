@@ -16,12 +16,12 @@ mod passes;
 mod settings;
 
 pub use settings::{
-    CLEAN_PASS_ENOUGH, COARSE, COARSE_FIRST_BELOW, CROWD_RATIO, DENSE_SIGMAS, EARLY_CONVERGENCE,
-    FAR_SLIDE_M, FAR_SLIDE_SPREAD, FIRST_MATCH_CONVERGENCE, FIRST_PASS_CONVERGENCE,
-    FIRST_PASS_ENOUGH, FIRST_PASS_SURFACE_POINTS, FIRST_PASS_THINNING, FIRST_SPREAD,
-    FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD, LONELY_PASS_ENOUGH, LonelyEnough,
-    MERGE_REACH, POLISH_MORE, QuickFinish, RESTART_SHORTFALL, RESTARTS, RESTARTS_AGREE,
-    RestartsAgree, SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH,
+    BOTH_WAYS, CLEAN_PASS_ENOUGH, COARSE, COARSE_FIRST_BELOW, CROWD_RATIO, DENSE_SIGMAS,
+    EARLY_CONVERGENCE, FAR_SLIDE_M, FAR_SLIDE_SPREAD, FIRST_MATCH_CONVERGENCE,
+    FIRST_PASS_CONVERGENCE, FIRST_PASS_ENOUGH, FIRST_PASS_SURFACE_POINTS, FIRST_PASS_THINNING,
+    FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD, LONELY_PASS_ENOUGH,
+    LonelyEnough, MERGE_REACH, POLISH_MORE, QuickFinish, RESTART_SHORTFALL, RESTARTS,
+    RESTARTS_AGREE, RestartsAgree, SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH,
     SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_QUICK, SPARSE_SIGMAS, SPARSE_START, SlideCheck,
     StartRounds, THESIS_SIGMAS, Thinning, WIDE_SIGMAS,
 };
@@ -31,10 +31,10 @@ use super::kdtree::LastNearest;
 use super::lines::{LazyLines, LineParams};
 use super::matcher::{Convergence, MatchResult, Reference, ScanMatcher};
 use super::plicp::PointToLine;
-use super::quality::{TrustRule, slide_vote};
+use super::quality::{TrustRule, polish_both_ways, slide_vote};
 use super::scan::{SPARSE_BEAM_STEP_RAD, ScanPoints, beam_step_below};
-use crate::geometry::Pose2;
-use passes::{Assist, Visits};
+use crate::geometry::{Pose2, wrap_angle};
+use passes::{Assist, POLISH_GATE_M, POLISH_WIDTH_M, Visits};
 use settings::{COARSE_MARGIN, WIDE_AFTER};
 use std::cell::Cell;
 
@@ -390,6 +390,14 @@ pub struct Lorentz {
     /// weighed. Not in the thesis; `None` (the default) leaves it out, and
     /// [`Lorentz::with_lines`] has [`SLIDE_CHECK`] here as well.
     pub sparse_slide_check: Option<SlideCheck>,
+    /// For dense scans (as `dense_sigmas_m`) that do not look clean (the test of
+    /// `first_pass_thinning`, every dense scan without it): when the match has its answer
+    /// (checked for a slide), this many rounds of the point-to-line polish both ways, the
+    /// reference's points held to the current scan's surfaces as well as the current points to
+    /// the reference's. The answer so polished is judged again, and kept unless the first was
+    /// trusted and it is not. Not in the thesis; `None` (the default) polishes one way, and
+    /// [`Lorentz::with_lines`] has [`BOTH_WAYS`].
+    pub both_ways: Option<usize>,
 }
 
 impl Lorentz {
@@ -448,6 +456,7 @@ impl Lorentz {
             sparse_quick: Some(SPARSE_QUICK),
             slide_check: Some(SLIDE_CHECK),
             sparse_slide_check: Some(SLIDE_CHECK),
+            both_ways: Some(BOTH_WAYS),
             ..Lorentz::default()
         }
     }
@@ -511,6 +520,7 @@ impl Default for Lorentz {
             sparse_quick: None,
             slide_check: None,
             sparse_slide_check: None,
+            both_ways: None,
         }
     }
 }
@@ -564,7 +574,8 @@ impl ScanMatcher for Lorentz {
             }
             matched.iterations = iterations;
         }
-        self.checked(scans, grown, dense, matched, &mut last)
+        let checked = self.checked(scans, grown, dense, matched, &mut last);
+        self.polished_both_ways(scans, dense, checked, &mut last)
     }
 }
 
@@ -693,6 +704,45 @@ impl Lorentz {
         match check {
             Some(check) => self.check_slide(check, scans, grown, dense, matched, last),
             None => matched,
+        }
+    }
+
+    /// `matched`, polished both ways as [`Lorentz::both_ways`] says when `dense` and the
+    /// current scan does not look clean; judged again, and kept unless `matched` was trusted
+    /// and the polished answer is not.
+    fn polished_both_ways(
+        &self,
+        (reference, current): (&Reference, &ScanPoints),
+        dense: bool,
+        matched: MatchResult,
+        last: &mut [Option<LastNearest>],
+    ) -> MatchResult {
+        let Some(rounds) = self.both_ways.filter(|_| dense) else {
+            return matched;
+        };
+        if self
+            .first_pass_thinning
+            .is_some_and(|thinning| passes::looks_clean(&current.xy, &thinning))
+        {
+            return matched;
+        }
+        let pose = polish_both_ways(
+            reference,
+            &current.xy,
+            matched.pose,
+            (rounds, POLISH_WIDTH_M, POLISH_GATE_M),
+            last,
+        );
+        let pose = Pose2::new(pose.x, pose.y, wrap_angle(pose.theta));
+        let rule = TrustRule::default();
+        let quality = rule.assess_near(reference, &current.xy, &pose, Some(last));
+        if rule.trusts(&matched.quality) && !rule.trusts(&quality) {
+            return matched;
+        }
+        MatchResult {
+            pose,
+            quality,
+            ..matched
         }
     }
 

@@ -129,11 +129,16 @@ impl Visits {
     }
 }
 
+/// The polish's Cauchy width: a residual this large weighs half as much as one of none, metres.
+pub(super) const POLISH_WIDTH_M: f64 = 0.01;
+
+/// The polish leaves out a residual larger than this, metres.
+pub(super) const POLISH_GATE_M: f64 = 0.05;
+
 /// Whether at most `thinning.most_lonely` of the points `xy` (in beam order) lie farther than
 /// `thinning.lonely_m` from both their neighbours: a scan clean enough to be thinned. The first
 /// and last points, with one neighbour each, are never lonely.
-#[cfg(test)]
-fn looks_clean(xy: &[[f64; 2]], thinning: &Thinning) -> bool {
+pub(super) fn looks_clean(xy: &[[f64; 2]], thinning: &Thinning) -> bool {
     clean_with(lonely_points(xy, thinning), xy.len(), thinning)
 }
 
@@ -468,7 +473,7 @@ impl Lorentz {
         (more, extra): (Option<(f64, usize)>, usize),
         last: &mut [Option<LastNearest>],
     ) -> (Pose2, Option<Pose2>) {
-        let rounds = (self.polish_rounds + extra, 0.01, 0.05);
+        let rounds = (self.polish_rounds + extra, POLISH_WIDTH_M, POLISH_GATE_M);
         let (polished, after_rounds) =
             polish_near(reference, &current.xy, pose, rounds, more, last);
         let wrapped = |p: Pose2| Pose2::new(p.x, p.y, wrap_angle(p.theta));
