@@ -1944,11 +1944,16 @@ fn scans_with_outliers_count_the_points_not_lonely() {
     );
 }
 
-/// The polish both ways ([`BOTH_WAYS`]) on a dense scan that does not look clean: over held-out
-/// seed 83 (150 pairs a row), the twin's pairs with 20 % outliers lie nearer the truth by the
-/// median pair by a twentieth at least (a thirteenth over seeds 1–80), as many of them right
-/// and no more of them trusted and wrong; the real logs' scans all look clean, with the same
-/// answers to the last bit. Without the slide check, as above.
+/// Per row, for each of two matchers: its errors (mm), right answers, and trusted wrong ones.
+type Side = ([Vec<f64>; 2], [usize; 2], [usize; 2]);
+
+/// The polish both ways ([`BOTH_WAYS`]) on a scan that does not look clean: over held-out seed
+/// 83 (150 pairs a row), the twin's pairs with 20 % outliers lie nearer the truth by the
+/// median pair, by a twentieth at least at 0.5° and a tenth at 1° (a thirteenth and a sixth
+/// over seeds 1–80), with as many of them right and no more trusted and wrong (a pair either
+/// way allowed); Edmonton's 1° scans, some of which do not look clean, right as often; the
+/// other real logs' scans all look clean, with the same answers to the last bit. Without the
+/// slide check, as above.
 #[test]
 fn scans_with_outliers_are_polished_both_ways() {
     use robot::localization::{BOTH_WAYS, Lorentz};
@@ -1958,46 +1963,62 @@ fn scans_with_outliers_are_polished_both_ways() {
         ..Lorentz::with_lines()
     };
     assert_eq!(now.both_ways, Some(BOTH_WAYS));
-    let one_way = Lorentz {
+    let left_as_is = Lorentz {
         both_ways: None,
         ..now.clone()
     };
     let taking = |name: &str| {
         let real = name.starts_with("real");
-        (real || name == "synthetic, 20 %").then_some(Taking {
+        let clean = name.contains("belgioioso") || name.contains("freiburg");
+        (real || name.ends_with("20 %")).then_some(Taking {
             pairs: usize::MAX,
-            unchanged: real,
+            unchanged: clean,
         })
     };
-    let mut errors_mm: [Vec<f64>; 2] = [Vec::new(), Vec::new()];
-    let (mut right, mut trusted_wrong) = ([0; 2], [0; 2]);
-    each_pair_taken_side_by_side([&one_way, &now], (&[83], 150), taking, |set, c, answers| {
-        if set.name == "synthetic, 20 %" {
+    let mut rows: BTreeMap<String, Side> = BTreeMap::new();
+    each_pair_taken_side_by_side(
+        [&left_as_is, &now],
+        (&[83], 150),
+        taking,
+        |set, c, answers| {
+            let (errors_mm, right, trusted_wrong) = rows.entry(set.name.clone()).or_default();
             for (k, answer) in answers.iter().enumerate() {
                 errors_mm[k].push(errors(&c.truth, &answer.pose).1);
                 let is = is_right(set, c, answer);
                 right[k] += usize::from(is);
                 trusted_wrong[k] += usize::from(answer.converged && !is);
             }
-        }
-    });
-    let [before, after] = errors_mm.map(|mut e| {
-        assert_eq!(e.len(), 150);
-        e.sort_by(f64::total_cmp);
-        e[e.len() / 2]
-    });
-    println!(
-        "median error {before:.3} -> {after:.3} mm, right {right:?}, trusted and wrong {trusted_wrong:?}"
+        },
     );
-    assert!(
-        after <= 0.95 * before,
-        "median error {before:.3} -> {after:.3} mm"
+    assert_eq!(
+        rows.len(),
+        6,
+        "the two synthetic rows with outliers and four real ones"
     );
-    assert!(right[1] >= right[0], "right {right:?}");
-    assert!(
-        trusted_wrong[1] <= trusted_wrong[0],
-        "trusted and wrong {trusted_wrong:?}"
-    );
+    for (name, (errors_mm, right, trusted_wrong)) in rows {
+        let [before, after] = errors_mm.map(|mut e| {
+            assert!(!e.is_empty());
+            e.sort_by(f64::total_cmp);
+            e[e.len() / 2]
+        });
+        println!(
+            "{name}: median error {before:.3} -> {after:.3} mm, right {right:?}, trusted and wrong {trusted_wrong:?}"
+        );
+        assert!(right[1] + 1 >= right[0], "{name}: right {right:?}");
+        assert!(
+            trusted_wrong[1] <= trusted_wrong[0] + 1,
+            "{name}: trusted and wrong {trusted_wrong:?}"
+        );
+        let least_gain = match name.as_str() {
+            "synthetic, 20 %" => 0.95,
+            "synthetic 1°, 20 %" => 0.9,
+            _ => continue,
+        };
+        assert!(
+            after <= least_gain * before,
+            "{name}: median error {before:.3} -> {after:.3} mm"
+        );
+    }
 }
 
 /// [`rows_side_by_side`] of a line-assisted Lorentzian without a step (`before`) and with it

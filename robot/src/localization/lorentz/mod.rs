@@ -31,7 +31,7 @@ use super::kdtree::LastNearest;
 use super::lines::{LazyLines, LineParams};
 use super::matcher::{Convergence, MatchResult, Reference, ScanMatcher};
 use super::plicp::PointToLine;
-use super::quality::{TrustRule, polish_both_ways, slide_vote};
+use super::quality::{MatchQuality, TrustRule, polish_both_ways, slide_vote};
 use super::scan::{SPARSE_BEAM_STEP_RAD, ScanPoints, beam_step_below};
 use crate::geometry::{Pose2, wrap_angle};
 use passes::{Assist, POLISH_GATE_M, POLISH_WIDTH_M, Visits};
@@ -390,12 +390,12 @@ pub struct Lorentz {
     /// weighed. Not in the thesis; `None` (the default) leaves it out, and
     /// [`Lorentz::with_lines`] has [`SLIDE_CHECK`] here as well.
     pub sparse_slide_check: Option<SlideCheck>,
-    /// For dense scans (as `dense_sigmas_m`) that do not look clean (the test of
-    /// `first_pass_thinning`, every dense scan without it): when the match has its answer
-    /// (checked for a slide), this many rounds of the point-to-line polish both ways, the
-    /// reference's points held to the current scan's surfaces as well as the current points to
-    /// the reference's. The answer so polished is judged again, and kept unless the first was
-    /// trusted and it is not. Not in the thesis; `None` (the default) polishes one way, and
+    /// For a current scan that does not look clean (the test of `first_pass_thinning`, dense
+    /// or sparse; every scan without it): when the match has its answer (checked for a slide),
+    /// this many rounds of the point-to-line polish both ways, the reference's points held to
+    /// the current scan's surfaces as well as the current points to the reference's. The
+    /// answer so polished is judged again, and kept unless the first was trusted and it is not.
+    /// Not in the thesis; `None` (the default) leaves the answer as it is, and
     /// [`Lorentz::with_lines`] has [`BOTH_WAYS`].
     pub both_ways: Option<usize>,
 }
@@ -575,7 +575,7 @@ impl ScanMatcher for Lorentz {
             matched.iterations = iterations;
         }
         let checked = self.checked(scans, grown, dense, matched, &mut last);
-        self.polished_both_ways(scans, dense, checked, &mut last)
+        self.polished_both_ways(scans, checked, &mut last)
     }
 }
 
@@ -707,17 +707,17 @@ impl Lorentz {
         }
     }
 
-    /// `matched`, polished both ways as [`Lorentz::both_ways`] says when `dense` and the
-    /// current scan does not look clean; judged again, and kept unless `matched` was trusted
-    /// and the polished answer is not.
+    /// `matched`, polished both ways as [`Lorentz::both_ways`] says when the current scan does
+    /// not look clean; judged again, and kept unless `matched` was trusted
+    /// (by the rule's figures and its hold test, as [`ScanMatcher::align`] judges) and the
+    /// polished answer is not.
     fn polished_both_ways(
         &self,
         (reference, current): (&Reference, &ScanPoints),
-        dense: bool,
         matched: MatchResult,
         last: &mut [Option<LastNearest>],
     ) -> MatchResult {
-        let Some(rounds) = self.both_ways.filter(|_| dense) else {
+        let Some(rounds) = self.both_ways else {
             return matched;
         };
         if self
@@ -736,7 +736,11 @@ impl Lorentz {
         let pose = Pose2::new(pose.x, pose.y, wrap_angle(pose.theta));
         let rule = TrustRule::default();
         let quality = rule.assess_near(reference, &current.xy, &pose, Some(last));
-        if rule.trusts(&matched.quality) && !rule.trusts(&quality) {
+        // Trusted as `align` will judge: the rule's figures, then its hold test.
+        let trusted = |pose: &Pose2, quality: &MatchQuality| {
+            rule.trusts(quality) && rule.holds(reference, &current.xy, pose, quality)
+        };
+        if !trusted(&pose, &quality) && trusted(&matched.pose, &matched.quality) {
             return matched;
         }
         MatchResult {
