@@ -622,19 +622,15 @@ pub fn polish_near(
         let mut h = [[0.0f64; 3]; 3];
         let mut g = [0.0f64; 3];
         for constraint in constraints(reference, current, &pose, Some(&mut *last)) {
-            let e = constraint.residual;
-            if let Some(jac) = constraint.jacobian
-                && e.abs() <= gate
-                && !constraint.beyond
-            {
+            if let Some((jac, e)) = polish_term(&constraint, gate) {
                 accumulate(&mut h, &mut g, jac, e, c2 / (c2 + e * e));
             }
         }
-        let Some(d) = solve3(h, g.map(|v| -v)) else {
+        let Some((stepped, d)) = polish_step(pose, h, g) else {
             break;
         };
-        pose = Pose2::new(pose.x + d[0], pose.y + d[1], pose.theta + d[2]);
-        if d[0].hypot(d[1]) < 1e-6 && d[2].abs() < 1e-7 {
+        pose = stepped;
+        if polish_settled(d) {
             break;
         }
         if extra > 0 && round + 1 >= rounds {
@@ -682,11 +678,8 @@ pub(super) fn polish_both_ways(
             if nearest_current[j].is_none_or(|(_, d)| d2 < d) {
                 nearest_current[j] = Some((i, d2));
             }
-            if let Some(jac) = constraint.jacobian
-                && constraint.residual.abs() <= gate
-                && !constraint.beyond
-            {
-                add(jac, constraint.residual);
+            if let Some((jac, e)) = polish_term(&constraint, gate) {
+                add(jac, e);
             }
         }
         let (s, co) = pose.theta.sin_cos();
@@ -718,15 +711,40 @@ pub(super) fn polish_both_ways(
                 );
             }
         }
-        let Some(d) = solve3(h, g.map(|v| -v)) else {
+        let Some((stepped, d)) = polish_step(pose, h, g) else {
             break;
         };
-        pose = Pose2::new(pose.x + d[0], pose.y + d[1], pose.theta + d[2]);
-        if d[0].hypot(d[1]) < 1e-6 && d[2].abs() < 1e-7 {
+        pose = stepped;
+        if polish_settled(d) {
             break;
         }
     }
     pose
+}
+
+/// A current point's term in the polish, its residual's derivatives and the residual itself:
+/// for a point on a surface's line, within `gate` of it and within the line's points.
+fn polish_term(constraint: &Constraint, gate: f64) -> Option<([f64; 3], f64)> {
+    let e = constraint.residual;
+    constraint
+        .jacobian
+        .filter(|_| e.abs() <= gate && !constraint.beyond)
+        .map(|jac| (jac, e))
+}
+
+/// One Gauss–Newton round of a polish: `pose` moved by the step `d` that solves `h d = −g`,
+/// and that step; `None` where `h` is singular.
+fn polish_step(pose: Pose2, h: [[f64; 3]; 3], g: [f64; 3]) -> Option<(Pose2, [f64; 3])> {
+    let d = solve3(h, g.map(|v| -v))?;
+    Some((
+        Pose2::new(pose.x + d[0], pose.y + d[1], pose.theta + d[2]),
+        d,
+    ))
+}
+
+/// Whether a polish's step is too small for another round: under 1 µm and 0.1 µrad.
+fn polish_settled(d: [f64; 3]) -> bool {
+    d[0].hypot(d[1]) < 1e-6 && d[2].abs() < 1e-7
 }
 
 /// From point `i` of `points` (in scan order), the neighbour in scan order nearer to `q` while
