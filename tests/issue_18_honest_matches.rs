@@ -1944,16 +1944,20 @@ fn scans_with_outliers_count_the_points_not_lonely() {
     );
 }
 
-/// Per row, for each of two matchers: its errors (mm), right answers, and trusted wrong ones.
-type Side = ([Vec<f64>; 2], [usize; 2], [usize; 2]);
+/// Per row, for each of two matchers: the summed errors (mm) of the pairs both get right, their
+/// right answers, and their trusted wrong ones.
+type Side = ([f64; 2], [usize; 2], [usize; 2]);
 
 /// The polish both ways ([`BOTH_WAYS`]) on a scan that does not look clean: over held-out seed
-/// 83 (150 pairs a row), the twin's pairs with 20 % outliers lie nearer the truth by the
-/// median pair, by a twentieth at least at 0.5° and a tenth at 1° (a thirteenth and a sixth
-/// over seeds 1–80), with as many of them right and no more trusted and wrong (a pair either
-/// way allowed); Edmonton's 1° scans, some of which do not look clean, right as often; the
-/// other real logs' scans all look clean, with the same answers to the last bit. Without the
-/// slide check, as above.
+/// 83 (150 pairs a row), on the pairs both answer right the twin's pairs with 20 % outliers lie
+/// nearer the truth on average, at 1° by a twelfth at least, with as many of them right and
+/// no more trusted and wrong (a pair either way allowed); Edmonton's 1° scans, some of which do
+/// not look clean, right as often; the other real logs' scans all look clean, with the same
+/// answers to the last bit. Without the slide check, as above. Checked on the first 150 pairs
+/// of each of seeds 1–80 (`twin matchers` with and without it, the slide check on): the mean
+/// error's ratio was 0.87–0.98 at 0.5° and 0.73–0.89 at 1°, right answers at most one fewer and
+/// trusted wrong ones at most one more on every seed. (The ratio of the median errors on 150
+/// pairs is no claim about the rows: it ranged 0.83–1.05.)
 #[test]
 fn scans_with_outliers_are_polished_both_ways() {
     use robot::localization::{BOTH_WAYS, Lorentz};
@@ -1982,11 +1986,13 @@ fn scans_with_outliers_are_polished_both_ways() {
         taking,
         |set, c, answers| {
             let (errors_mm, right, trusted_wrong) = rows.entry(set.name.clone()).or_default();
+            let is = answers.map(|answer| is_right(set, c, answer));
             for (k, answer) in answers.iter().enumerate() {
-                errors_mm[k].push(errors(&c.truth, &answer.pose).1);
-                let is = is_right(set, c, answer);
-                right[k] += usize::from(is);
-                trusted_wrong[k] += usize::from(answer.converged && !is);
+                if is == [true, true] {
+                    errors_mm[k] += errors(&c.truth, &answer.pose).1;
+                }
+                right[k] += usize::from(is[k]);
+                trusted_wrong[k] += usize::from(answer.converged && !is[k]);
             }
         },
     );
@@ -1995,28 +2001,23 @@ fn scans_with_outliers_are_polished_both_ways() {
         6,
         "the two synthetic rows with outliers and four real ones"
     );
-    for (name, (errors_mm, right, trusted_wrong)) in rows {
-        let [before, after] = errors_mm.map(|mut e| {
-            assert!(!e.is_empty());
-            e.sort_by(f64::total_cmp);
-            e[e.len() / 2]
-        });
+    for (name, ([before, after], right, trusted_wrong)) in rows {
         println!(
-            "{name}: median error {before:.3} -> {after:.3} mm, right {right:?}, trusted and wrong {trusted_wrong:?}"
+            "{name}: errors summed over the pairs right both ways {before:.1} -> {after:.1} mm, right {right:?}, trusted and wrong {trusted_wrong:?}"
         );
         assert!(right[1] + 1 >= right[0], "{name}: right {right:?}");
         assert!(
             trusted_wrong[1] <= trusted_wrong[0] + 1,
             "{name}: trusted and wrong {trusted_wrong:?}"
         );
-        let least_gain = match name.as_str() {
-            "synthetic, 20 %" => 0.95,
-            "synthetic 1°, 20 %" => 0.9,
+        let most = match name.as_str() {
+            "synthetic, 20 %" => 1.0,
+            "synthetic 1°, 20 %" => 11.0 / 12.0,
             _ => continue,
         };
         assert!(
-            after <= least_gain * before,
-            "{name}: median error {before:.3} -> {after:.3} mm"
+            after < most * before,
+            "{name}: errors summed over the pairs right both ways {before:.1} -> {after:.1} mm"
         );
     }
 }

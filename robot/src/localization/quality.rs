@@ -1152,9 +1152,13 @@ mod tests {
 
     /// The polish both ways: from 1 cm and 0.3° off, it lands within 0.05 mm and 0.003° of the
     /// truth between two noiseless scans of a room (where the walls meet, a point's nearest
-    /// surface may be the other wall's, as one way: 0.013 mm there); between two noisy ones, matching the first to the second and the
-    /// second to the first give the same answer, where polished one way the two answers differ
-    /// by the scans' noise as each side sees it.
+    /// surface may be the other wall's, as one way: 0.013 mm there). Between two noisy ones,
+    /// matching the first to the second and the second to the first give nearly the same
+    /// answer, where polished one way the two answers differ by the scans' noise as each side
+    /// sees it: over twenty draws of the noise, the two answers' RMS disagreement both ways is
+    /// under a fifth of one way's, in position and in heading. (Over 199 draws, 0.19 against
+    /// 2.13 mm and 0.003 against 0.036°; every run of twenty of them under 0.15 of one way's. A
+    /// single draw is no claim: one way's two answers agree closely by chance now and then.)
     #[test]
     fn the_polish_both_ways_treats_both_scans_alike() {
         let (a, b) = (Pose2::new(0.0, 0.0, 0.0), Pose2::new(0.3, 0.1, 0.2));
@@ -1171,7 +1175,6 @@ mod tests {
             miss.x.hypot(miss.y) < 5e-5 && miss.theta.abs() < 5e-5,
             "{miss:?}"
         );
-        let (first, second) = (room_scan(a, 0.02, 1), room_scan(b, 0.02, 2));
         let one = |first: &[[f64; 2]], second: &[[f64; 2]], guess: Pose2| {
             polish(
                 &reference(first),
@@ -1185,25 +1188,43 @@ mod tests {
         // Each answer composed with its swapped match: the identity if the two agree.
         let disagreement = |forth: Pose2, back: Pose2| {
             let loop_ = forth.compose(&back);
-            (loop_.x.hypot(loop_.y), loop_.theta.abs())
+            [loop_.x.hypot(loop_.y), loop_.theta.abs()]
         };
-        let one_way = disagreement(
-            one(&first, &second, off),
-            one(&second, &first, off.inverse()),
-        );
-        let both_ways = disagreement(
-            both(&first, &second, off),
-            both(&second, &first, off.inverse()),
-        );
-        println!("one way {one_way:?}, both ways {both_ways:?}");
-        assert!(
-            both_ways.0 < 0.2 * one_way.0,
-            "{both_ways:?} against {one_way:?}"
-        );
-        assert!(
-            both_ways.1 < 0.2 * one_way.1,
-            "{both_ways:?} against {one_way:?}"
-        );
+        // Summed squares of the disagreement in position and heading, one way and both ways.
+        let (mut one_way, mut both_ways) = ([0.0; 2], [0.0; 2]);
+        for draw in 0..20u64 {
+            let first = room_scan(a, 0.02, 2 * draw + 1);
+            let second = room_scan(b, 0.02, 2 * draw + 2);
+            let sums = [
+                (
+                    &mut one_way,
+                    disagreement(
+                        one(&first, &second, off),
+                        one(&second, &first, off.inverse()),
+                    ),
+                ),
+                (
+                    &mut both_ways,
+                    disagreement(
+                        both(&first, &second, off),
+                        both(&second, &first, off.inverse()),
+                    ),
+                ),
+            ];
+            for (sum, d) in sums {
+                sum[0] += d[0] * d[0];
+                sum[1] += d[1] * d[1];
+            }
+        }
+        let rms = |sum: [f64; 2]| sum.map(|s| (s / 20.0).sqrt());
+        let (one_way, both_ways) = (rms(one_way), rms(both_ways));
+        println!("RMS disagreement one way {one_way:?}, both ways {both_ways:?}");
+        for k in 0..2 {
+            assert!(
+                both_ways[k] < 0.2 * one_way[k],
+                "{both_ways:?} against {one_way:?}"
+            );
+        }
     }
 
     #[test]
