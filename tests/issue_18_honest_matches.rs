@@ -1761,9 +1761,12 @@ fn the_first_match_slides_along_its_lines_and_a_loose_answer_is_checked() {
 /// (`CROWD_RATIO`). In the Table 5.1 study the two trials with the worst translation errors of
 /// the line-assisted Lorentzian, one at each outlier rate, were such pairs: leaving out the
 /// pairs crowded onto one reference point far beyond its nearest, they end within a few
-/// millimetres; keeping them (the matcher before), 28–34 mm off, with the answer trusted.
-/// (Trial 13357 ended 3.9 mm off until a dense first pass started on every second point,
-/// `FIRST_PASS_THINNING`, and 5.5 mm since; keeping the crowded pairs, 27.6 mm.)
+/// millimetres; keeping them (the matcher before), 28–34 mm off, with the answer trusted: past
+/// the study's 10 mm line. (Trial 13357 ended 3.9 mm off until a dense first pass started on
+/// every second point, `FIRST_PASS_THINNING`, and 5.5 mm since; keeping the crowded pairs,
+/// 27.6 mm. Since the polish both ways went 2 cm wide, `BOTH_WAYS_WIDTH_M`, its scan with 20 %
+/// outliers ends 3.7 mm off, and 17.0 mm keeping the crowded pairs: the polish pulls that
+/// answer part of the way back.)
 #[test]
 fn points_past_the_references_view_do_not_crowd_onto_its_edge() {
     use robot::localization::{CROWD_RATIO, Lorentz, ScanMatcher};
@@ -1786,7 +1789,7 @@ fn points_past_the_references_view_do_not_crowd_onto_its_edge() {
         };
         let ((kept, _), (dropped, trusted)) = (mm(&crowded), mm(&now));
         assert!(
-            kept > 20.0 && dropped < 8.0 && trusted,
+            kept > 10.0 && dropped < 8.0 && trusted,
             "trial {index} ({motion:?}): {kept:.1} mm off with the crowded pairs, {dropped:.1} mm \
              without (trusted: {trusted})"
         );

@@ -34,7 +34,7 @@ use super::plicp::PointToLine;
 use super::quality::{MatchQuality, TrustRule, polish_both_ways, slide_vote};
 use super::scan::{SPARSE_BEAM_STEP_RAD, ScanPoints, beam_step_below};
 use crate::geometry::{Pose2, wrap_angle};
-use passes::{Assist, POLISH_GATE_M, POLISH_WIDTH_M, Visits};
+use passes::{Assist, BOTH_WAYS_WIDTH_M, POLISH_GATE_M, Visits};
 use settings::{COARSE_MARGIN, WIDE_AFTER};
 use std::cell::Cell;
 
@@ -730,7 +730,7 @@ impl Lorentz {
             reference,
             &current.xy,
             matched.pose,
-            (rounds, POLISH_WIDTH_M, POLISH_GATE_M),
+            (rounds, BOTH_WAYS_WIDTH_M, POLISH_GATE_M),
             last,
         );
         let pose = Pose2::new(pose.x, pose.y, wrap_angle(pose.theta));

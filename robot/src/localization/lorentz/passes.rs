@@ -135,6 +135,17 @@ pub(super) const POLISH_WIDTH_M: f64 = 0.01;
 /// The polish leaves out a residual larger than this, metres.
 pub(super) const POLISH_GATE_M: f64 = 0.05;
 
+/// The Cauchy width of the polish both ways ([`super::Lorentz::both_ways`]), metres: twice
+/// the one-way polish's. Its residuals are each scan's points against the other's surfaces,
+/// so both scans' noise sits in every one of them, and at 1 cm the weights cut into the
+/// noise itself, not only the outliers. Widened from 1 to 2 cm (2026-12-07), over seeds 1–80
+/// of `twin matchers --matchers lorentz-lines`: the twin's pairs with 20 % outliers 1.84 →
+/// 1.78 mm by the pooled median, one seed's median 1.65–2.16 → 1.56–2.01 mm, 95th percentile
+/// 4.88 → 4.65 mm, right on 2 more pairs of 24,000, trusted and wrong on 22, not 23; its 1°
+/// pairs 2.61 → 2.53 mm, 95th percentile 6.70 → 6.40 mm, right on 2 more, trusted and wrong on
+/// 16, not 18; Edmonton right on the same pairs. 2.5 and 3 cm did no better (seeds 1–20).
+pub(super) const BOTH_WAYS_WIDTH_M: f64 = 0.02;
+
 /// Whether at most `thinning.most_lonely` of the points `xy` (in beam order) lie farther than
 /// `thinning.lonely_m` from both their neighbours: a scan clean enough to be thinned. The first
 /// and last points, with one neighbour each, are never lonely.

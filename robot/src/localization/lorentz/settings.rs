@@ -377,8 +377,10 @@ pub const LONELY_PASS_ENOUGH: LonelyEnough = LonelyEnough {
 /// of 80 seeds. Scans drawn without range noise (scratch switches, seeds 1–4) showed why: the
 /// current scan's noise alone left 1.24 mm, near the least its Fisher information allows, the
 /// reference's alone 1.31, both 1.905. Polished one way, the reference's noise is seen only
-/// through the lines the current points are held to. Both ways, over seeds 1–80 (`twin
-/// matchers --matchers lorentz-lines`):
+/// through the lines the current points are held to. Both ways, with the one-way polish's
+/// Cauchy width of 1 cm, over seeds 1–80 (`twin matchers --matchers lorentz-lines`; the width
+/// has since been widened to 2 cm, `BOTH_WAYS_WIDTH_M` in `lorentz/passes.rs`, which leaves one
+/// seed of the 80 above 2 mm with 20 % outliers, at 2.01 mm):
 /// - the twin's pairs with 20 % outliers: pooled median error 1.98 → 1.84 mm, seed by seed
 ///   1.65–2.16 mm (above 2 on 2 seeds), right on 8 more pairs of 24,000, trusted and wrong on
 ///   23, not 31;
