@@ -138,12 +138,7 @@ pub trait ScanMatcher: Send + Sync + fmt::Debug {
         if result.quality == MatchQuality::NONE {
             result.quality = rule.assess(reference, &current.xy, &result.pose);
         }
-        // Asked only of an answer the rest of the rule trusts: two more searches.
-        result.converged = rule.trusts(&result.quality);
-        if result.converged {
-            result.quality.held = rule.holds(reference, &current.xy, &result.pose, &result.quality);
-            result.converged = result.quality.held;
-        }
+        result.converged = rule.confirms(reference, &current.xy, &result.pose, &mut result.quality);
         result
     }
 

@@ -229,6 +229,26 @@ impl TrustRule {
         })
     }
 
+    /// Whether an answer at `pose` of quality `q` is trusted as [`ScanMatcher::align`] judges
+    /// it: by [`trusts`](Self::trusts), and then, asked only of an answer that passes (two more
+    /// searches where its surfaces face one way), by [`holds`](Self::holds), whose finding it
+    /// writes into `q`'s [`held`](MatchQuality::held).
+    ///
+    /// [`ScanMatcher::align`]: super::ScanMatcher::align
+    pub fn confirms(
+        &self,
+        reference: &Reference,
+        current: &[[f64; 2]],
+        pose: &Pose2,
+        q: &mut MatchQuality,
+    ) -> bool {
+        if !self.trusts(q) {
+            return false;
+        }
+        q.held = self.holds(reference, current, pose, q);
+        q.held
+    }
+
     /// Whether a match of this quality would be trusted if enough of the scan fitted: it passes
     /// every test of [`trusts`](Self::trusts) but the share of inliers (the scans may overlap
     /// too little for it).

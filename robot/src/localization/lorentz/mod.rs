@@ -31,7 +31,7 @@ use super::kdtree::LastNearest;
 use super::lines::{LazyLines, LineParams};
 use super::matcher::{Convergence, MatchResult, Reference, ScanMatcher};
 use super::plicp::PointToLine;
-use super::quality::{MatchQuality, TrustRule, polish_both_ways, slide_vote};
+use super::quality::{TrustRule, polish_both_ways, slide_vote};
 use super::scan::{SPARSE_BEAM_STEP_RAD, ScanPoints, beam_step_below};
 use crate::geometry::{Pose2, wrap_angle};
 use passes::{Assist, BOTH_WAYS_WIDTH_M, POLISH_GATE_M, Visits};
@@ -735,12 +735,11 @@ impl Lorentz {
         );
         let pose = Pose2::new(pose.x, pose.y, wrap_angle(pose.theta));
         let rule = TrustRule::default();
-        let quality = rule.assess_near(reference, &current.xy, &pose, Some(last));
-        // Trusted as `align` will judge: the rule's figures, then its hold test.
-        let trusted = |pose: &Pose2, quality: &MatchQuality| {
-            rule.trusts(quality) && rule.holds(reference, &current.xy, pose, quality)
-        };
-        if !trusted(&pose, &quality) && trusted(&matched.pose, &matched.quality) {
+        let mut quality = rule.assess_near(reference, &current.xy, &pose, Some(last));
+        let mut before = matched.quality;
+        if !rule.confirms(reference, &current.xy, &pose, &mut quality)
+            && rule.confirms(reference, &current.xy, &matched.pose, &mut before)
+        {
             return matched;
         }
         MatchResult {
