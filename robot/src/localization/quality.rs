@@ -685,7 +685,11 @@ pub(super) fn polish_both_ways(
     last: &mut [Option<LastNearest>],
 ) -> Pose2 {
     let c2 = c * c;
-    let current_surfaces = surfaces(current);
+    // The current scan's surface at each point a reference point comes to, fitted when one
+    // first does: on the twin's pairs with 20 % outliers a third of the points, the outliers
+    // among them, never are (seed 39: 72,949 fits of 108,300 points, 1.1 % of the match's
+    // instructions saved).
+    let mut current_surfaces: Vec<Option<Option<Surface>>> = vec![None; current.len()];
     // For each reference point, the current point nearest to it among those it is nearest to.
     let mut nearest_current: Vec<Option<(usize, f64)>> = vec![None; reference.points.len()];
     for _ in 0..rounds {
@@ -715,7 +719,8 @@ pub(super) fn polish_both_ways(
             let d = [p[0] - pose.x, p[1] - pose.y];
             let q = [co * d[0] + s * d[1], -s * d[0] + co * d[1]];
             let i = walk_to_nearest(current, q, start.0);
-            let Some(surface) = &current_surfaces[i] else {
+            let Some(surface) = current_surfaces[i].get_or_insert_with(|| surface_at(current, i))
+            else {
                 continue;
             };
             let (e, within) = surface.place(q);
