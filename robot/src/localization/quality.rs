@@ -687,7 +687,7 @@ pub(super) fn polish_both_ways(
     let c2 = c * c;
     // The current scan's surface at each point a reference point comes to, fitted when one
     // first does: on the twin's pairs with 20 % outliers a third of the points, the outliers
-    // among them, never are (seed 39: 72,949 fits of 108,300 points, 1.1 % of the match's
+    // among them, never are (seed 39: 72,949 fits of 104,997 points, 1.1 % of the match's
     // instructions saved).
     let mut current_surfaces: Vec<Option<Option<Surface>>> = vec![None; current.len()];
     // For each reference point, the current point nearest to it among those it is nearest to.
