@@ -24,6 +24,7 @@
 //!
 //! Everything but the times is the same on every run and machine for a given seed.
 
+pub mod plain;
 pub mod reach;
 
 use super::CommandError;
