@@ -1,15 +1,17 @@
 #!/usr/bin/env python3
-"""CSM's C point-to-line ICP against the project's matchers, row by row, on one seed's pairs.
+"""A C matcher's race output (race_csm, race_mbicp) against the project's matchers, row by row.
 
-    compare.py MATCHERS_DIR RACE_DIR CSM_CSV [CSM_CSV ...]
+    compare.py [--like MATCHER] SEED_RUN [SEED_RUN ...]
 
-MATCHERS_DIR: the --out of `twin matchers --matchers pl-icp --seed S` (its pairs.csv gives the
-project's pl-icp answers); RACE_DIR: the RACE_CSV of `RACE_SEED=S cargo bench --bench
-matcher_race` (each pair's best times of lorentz-lines and pl-icp); CSM_CSV: race.c's output
-on the same seed's pairs (several: each pair's best time of them). Prints a Markdown table:
-CSM's and pl-icp's success, how many pairs the two answer alike (within 1 mm and 0.01 deg),
-CSM's and lorentz-lines' median pair, their ratio, the ratio of their times summed over the
-row, and pl-icp's median pair against CSM's. Standard library only.
+Each SEED_RUN is MATCHERS_DIR:RACE_DIR:C_CSV for one seed:
+  MATCHERS_DIR  the --out of `twin matchers --matchers lorentz-lines,MATCHER --seed S`
+                (its pairs.csv: the project's answers and successes);
+  RACE_DIR      the RACE_CSV of `RACE_SEED=S cargo bench --bench matcher_race` (each pair's
+                best times of lorentz-lines and pl-icp), or - to leave times out;
+  C_CSV         the C race's output on the same seed's pairs.
+Success is pooled over the runs; times are each run's median pair, given as the range over runs.
+MATCHER (default pl-icp) is the project's matcher whose answers are compared with the C code's
+(within 1 mm and 0.01 deg). Prints a Markdown table. Standard library only.
 """
 import csv
 import math
@@ -33,52 +35,77 @@ def median(values):
     return sorted(values)[len(values) // 2]
 
 
+def span(values, digits):
+    if not values:
+        return "–"
+    lo, hi = min(values), max(values)
+    return f"{lo:.{digits}f}" if lo == hi else f"{lo:.{digits}f}–{hi:.{digits}f}"
+
+
 def main(argv):
-    if len(argv) < 4:
-        fail(__doc__.strip().splitlines()[2].strip())
-    matchers_dir, race_dir, csm_files = argv[1], argv[2], argv[3:]
-    ours = {}
-    for r in read_csv(os.path.join(matchers_dir, "pairs.csv")):
-        if r["matcher"] == "pl-icp":
-            ours[(r["set"].replace(" ", "_"), int(r["pair"]))] = r
-    csm, rows = {}, []
-    for path in csm_files:
-        for line, r in enumerate(read_csv(path), start=2):
+    args = argv[1:]
+    like = "pl-icp"
+    if args[:1] == ["--like"]:
+        if len(args) < 2:
+            fail("--like needs a matcher's name")
+        like, args = args[1], args[2:]
+    if not args:
+        fail("usage: compare.py [--like MATCHER] MATCHERS_DIR:RACE_DIR:C_CSV ...")
+    stats, order = {}, []
+    for run in args:
+        parts = run.split(":")
+        if len(parts) != 3:
+            fail(f"{run!r}: expected MATCHERS_DIR:RACE_DIR:C_CSV")
+        matchers_dir, race_dir, c_csv = parts
+        ours = {}
+        for r in read_csv(os.path.join(matchers_dir, "pairs.csv")):
+            ours[(r["set"].replace(" ", "_"), int(r["pair"]), r["matcher"])] = r
+        c_rows = {}
+        for line, r in enumerate(read_csv(c_csv), start=2):
             try:
-                key, micros = (r["row"], int(r["pair"])), float(r["micros"])
+                c_rows.setdefault(r["row"], {})[int(r["pair"])] = r
+                float(r["micros"])
             except (KeyError, ValueError) as e:
-                fail(f"{path}, line {line}: expected row,pair,micros,...: {e}")
-            if key[0] not in rows:
-                rows.append(key[0])
-            if key in csm:
-                csm[key]["micros"] = min(csm[key]["micros"], micros)
-            else:
-                csm[key] = dict(r, micros=micros)
-    print("| row | CSM success | pl-icp success | answered alike | CSM median pair "
-          "| lorentz-lines median pair | ratio | whole row | pl-icp median / CSM's |")
-    print("|---|---|---|---|---|---|---|---|---|")
-    for row in rows:
-        race_file = os.path.join(race_dir, row.replace(",", "_").replace("/", "_") + ".csv")
-        race = {int(r["pair"]): r for r in read_csv(race_file)}
-        pairs = sorted(p for (name, p) in csm if name == row)
-        missing = [p for p in pairs if p not in race or (row, p) not in ours]
-        if missing:
-            fail(f"row {row}: pairs {missing[:5]} are not in {race_file} or in pairs.csv")
-        c = [csm[(row, p)]["micros"] for p in pairs]
-        ll = [float(race[p]["lorentz_lines_us"]) for p in pairs]
-        pl = [float(race[p]["pl_icp_us"]) for p in pairs]
-        alike = 0
-        for p in pairs:
-            o, k = ours[(row, p)], csm[(row, p)]
-            dxy = math.hypot(float(o["x_m"]) - float(k["x"]), float(o["y_m"]) - float(k["y"]))
-            dth = math.remainder(math.radians(float(o["theta_deg"])) - float(k["theta"]), 2 * math.pi)
-            alike += dxy <= 1e-3 and abs(dth) <= math.radians(0.01)
-        n = len(pairs)
-        csm_success = sum(int(csm[(row, p)]["success"]) for p in pairs) / n
-        pl_success = sum(int(ours[(row, p)]["success"]) for p in pairs) / n
-        print(f"| {row.replace('_', ' ')} | {csm_success:.4f} | {pl_success:.4f} | {alike}/{n} "
-              f"| {median(c):.0f} µs | {median(ll):.0f} µs | {median(ll) / median(c):.3f} "
-              f"| {sum(ll) / sum(c):.3f} | {median(pl) / median(c):.3f} |")
+                fail(f"{c_csv}, line {line}: expected row,pair,micros,...: {e}")
+        for row, pairs in c_rows.items():
+            if row not in stats:
+                order.append(row)
+                stats[row] = {"n": 0, "c": 0, "ll": 0, "like": 0, "alike": 0,
+                              "c_med": [], "ll_med": [], "ratio": [], "whole": []}
+            s = stats[row]
+            for p, k in pairs.items():
+                try:
+                    o, ll = ours[(row, p, like)], ours[(row, p, "lorentz-lines")]
+                except KeyError:
+                    fail(f"{matchers_dir}/pairs.csv has no {like} or lorentz-lines answer to {row} pair {p}")
+                s["n"] += 1
+                s["c"] += int(k["success"])
+                s["ll"] += int(ll["success"])
+                s["like"] += int(o["success"])
+                dxy = math.hypot(float(o["x_m"]) - float(k["x"]), float(o["y_m"]) - float(k["y"]))
+                dth = math.remainder(math.radians(float(o["theta_deg"])) - float(k["theta"]), 2 * math.pi)
+                s["alike"] += dxy <= 1e-3 and abs(dth) <= math.radians(0.01)
+            if race_dir != "-":
+                race_file = os.path.join(race_dir, row.replace(",", "_").replace("/", "_") + ".csv")
+                race = {int(r["pair"]): float(r["lorentz_lines_us"]) for r in read_csv(race_file)}
+                missing = [p for p in pairs if p not in race]
+                if missing:
+                    fail(f"{race_file} lacks pairs {missing[:5]}")
+                c = [float(pairs[p]["micros"]) for p in sorted(pairs)]
+                l = [race[p] for p in sorted(pairs)]
+                s["c_med"].append(median(c))
+                s["ll_med"].append(median(l))
+                s["ratio"].append(median(l) / median(c))
+                s["whole"].append(sum(l) / sum(c))
+    print(f"| row | pairs | C success | lorentz-lines success | {like} success | answered alike as {like} "
+          "| C median pair | lorentz-lines median pair | ratio of medians | whole row |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for row in order:
+        s = stats[row]
+        n = s["n"]
+        print(f"| {row.replace('_', ' ')} | {n} | {s['c'] / n:.4f} | {s['ll'] / n:.4f} | {s['like'] / n:.4f} "
+              f"| {s['alike'] / n:.2f} | {span(s['c_med'], 0)} µs | {span(s['ll_med'], 0)} µs "
+              f"| {span(s['ratio'], 3)} | {span(s['whole'], 3)} |")
 
 
 if __name__ == "__main__":
