@@ -6,7 +6,7 @@
 //! `row pair tolerance_m tolerance_rad guess_x guess_y guess_theta truth_x truth_y truth_theta
 //! angle_min angle_increment range_max n reference_ranges… current_ranges…`
 //!
-//! - `row` is the row's name with its spaces written as `_`;
+//! - `row` is the row's name with each whitespace character written as `_`;
 //! - poses are the current laser frame in the reference laser frame (metres, radians);
 //! - both scans have the same `n` beams from `angle_min`, `angle_increment` apart;
 //! - a beam that returned nothing is written as `range_max` (the smaller of the two scans'),
@@ -25,7 +25,7 @@ use std::io::{self, Write};
 pub fn write_pairs(sets: &[CaseSet], mut out: impl Write) -> io::Result<()> {
     let mut line = String::new();
     for set in sets {
-        let row = set.name.replace(' ', "_");
+        let row = set.name.replace(char::is_whitespace, "_");
         for (pair, case) in set.cases.iter().enumerate() {
             let (reference, current) = (&case.reference, &case.current);
             if reference.ranges.len() != current.ranges.len()
