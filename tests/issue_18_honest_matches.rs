@@ -814,15 +814,20 @@ fn restarts_rescue_large_guesses() {
 /// answers, loses no right one, and changes no answer that stayed near its guess; over four
 /// seeds (each has the slide on the corridor's pair 8 without the check). Trusted as the rule
 /// stood when the check came: without asking whether the scans hold the answer along the
-/// corridor (`TrustRule::holds`, which refuses most such slides on its own).
+/// corridor (`TrustRule::holds`, which refuses most such slides on its own), and both matchers
+/// without the walk of such a refused answer toward the guess (`GuessAlongFree`), which came
+/// after.
 #[test]
 fn a_trusted_answer_far_from_the_guess_is_checked() {
     use robot::localization::{FAR_SLIDE_M, Lorentz};
-    let unchecked = Lorentz {
-        far_slide_m: None,
+    let checked = Lorentz {
+        guess_along_free: None,
         ..Lorentz::with_lines()
     };
-    let checked = Lorentz::with_lines();
+    let unchecked = Lorentz {
+        far_slide_m: None,
+        ..checked.clone()
+    };
     assert_eq!(checked.far_slide_m, Some(FAR_SLIDE_M));
     let (mut slid_before, mut slid_after) = (0, 0);
     for seed in [1, 4, 7, 8] {
@@ -1077,7 +1082,9 @@ fn tally(totals: &mut Vec<(String, usize, usize)>, row: &str, a: usize, b: usize
 /// tested on its own below), and without the sparse scans' finish (`SPARSE_FINISH`) and quick
 /// finish (`SPARSE_QUICK`), which
 /// the thesis's schedule would otherwise run on dense scans too, so that the schedule alone is
-/// compared (and so with the thesis's last pass, which the finish replaces on sparse scans).
+/// compared (and so with the thesis's last pass, which the finish replaces on sparse scans),
+/// and without the walk of an answer refused along a corridor toward the guess
+/// (`GuessAlongFree`), which would bring an untrusted answer back toward the truth here.
 #[test]
 fn dense_scans_narrow_their_sigma_throughout() {
     use robot::localization::{Lorentz, beam_step};
@@ -1087,6 +1094,7 @@ fn dense_scans_narrow_their_sigma_throughout() {
         crowd_ratio: None,
         sparse_finish: None,
         sparse_quick: None,
+        guess_along_free: None,
         sigmas_m: thesis_sigmas(),
         ..Lorentz::with_lines()
     };
@@ -1624,8 +1632,11 @@ fn a_restart_that_fits_fewer_points_does_not_replace_the_first() {
         metres * 1e3
     );
     // Any trusted answer that fits most, however little (the matcher before): the look-alike.
+    // Without the walk along the corridor toward the guess (`GuessAlongFree`), which came
+    // after and would move that untrusted answer.
     let before = Lorentz {
         restart_shortfall: None,
+        guess_along_free: None,
         ..Lorentz::with_lines()
     };
     let slid = before.match_scans(&reference, &current, guess);

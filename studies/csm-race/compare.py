@@ -9,7 +9,8 @@ Each SEED_RUN is MATCHERS_DIR:RACE_DIR:C_CSV for one seed:
   RACE_DIR      the RACE_CSV of `RACE_SEED=S cargo bench --bench matcher_race` (each pair's
                 best times of lorentz-lines and pl-icp), or - to leave times out;
   C_CSV         the C race's output on the same seed's pairs.
-Success is pooled over the runs; times are each run's median pair, given as the range over runs.
+Success and the median errors are pooled over the runs; times are each run's median pair, given
+as the range over runs.
 MATCHER (default pl-icp) is the project's matcher whose answers are compared with the C code's
 (within 1 mm and 0.01 deg). Prints a Markdown table. Standard library only.
 """
@@ -42,6 +43,10 @@ def span(values, digits):
     return f"{lo:.{digits}f}" if lo == hi else f"{lo:.{digits}f}–{hi:.{digits}f}"
 
 
+def micros(values):
+    return f"{span(values, 0)} µs" if values else "–"
+
+
 def main(argv):
     args = argv[1:]
     like = "pl-icp"
@@ -57,9 +62,14 @@ def main(argv):
         if len(parts) != 3:
             fail(f"{run!r}: expected MATCHERS_DIR:RACE_DIR:C_CSV")
         matchers_dir, race_dir, c_csv = parts
-        ours = {}
-        for r in read_csv(os.path.join(matchers_dir, "pairs.csv")):
+        ours, seeds = {}, set()
+        pairs_csv = os.path.join(matchers_dir, "pairs.csv")
+        for r in read_csv(pairs_csv):
+            seeds.add(r["seed"])
             ours[(r["set"].replace(" ", "_"), int(r["pair"]), r["matcher"])] = r
+        if len(seeds) > 1:
+            fail(f"{pairs_csv} holds the answers of seeds {', '.join(sorted(seeds, key=int))}: "
+                 "give one `twin matchers --seed S` run for each C run")
         c_rows = {}
         for line, r in enumerate(read_csv(c_csv), start=2):
             try:
@@ -70,7 +80,7 @@ def main(argv):
         for row, pairs in c_rows.items():
             if row not in stats:
                 order.append(row)
-                stats[row] = {"n": 0, "c": 0, "ll": 0, "like": 0, "alike": 0,
+                stats[row] = {"n": 0, "c": 0, "ll": 0, "like": 0, "alike": 0, "c_err": [], "ll_err": [],
                               "c_med": [], "ll_med": [], "ratio": [], "whole": []}
             s = stats[row]
             for p, k in pairs.items():
@@ -81,6 +91,8 @@ def main(argv):
                 s["n"] += 1
                 s["c"] += int(k["success"])
                 s["ll"] += int(ll["success"])
+                s["c_err"].append(float(k["error_m"]) * 1e3)
+                s["ll_err"].append(float(ll["error_mm"]))
                 s["like"] += int(o["success"])
                 dxy = math.hypot(float(o["x_m"]) - float(k["x"]), float(o["y_m"]) - float(k["y"]))
                 dth = math.remainder(math.radians(float(o["theta_deg"])) - float(k["theta"]), 2 * math.pi)
@@ -98,13 +110,15 @@ def main(argv):
                 s["ratio"].append(median(l) / median(c))
                 s["whole"].append(sum(l) / sum(c))
     print(f"| row | pairs | C success | lorentz-lines success | {like} success | answered alike as {like} "
-          "| C median pair | lorentz-lines median pair | ratio of medians | whole row |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+          "| median error, C / lorentz-lines | C median pair | lorentz-lines median pair | ratio of medians "
+          "| whole row |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for row in order:
         s = stats[row]
         n = s["n"]
         print(f"| {row.replace('_', ' ')} | {n} | {s['c'] / n:.4f} | {s['ll'] / n:.4f} | {s['like'] / n:.4f} "
-              f"| {s['alike'] / n:.2f} | {span(s['c_med'], 0)} µs | {span(s['ll_med'], 0)} µs "
+              f"| {s['alike'] / n:.2f} | {median(s['c_err']):.2f} / {median(s['ll_err']):.2f} mm "
+              f"| {micros(s['c_med'])} | {micros(s['ll_med'])} "
               f"| {span(s['ratio'], 3)} | {span(s['whole'], 3)} |")
 
 

@@ -1,7 +1,7 @@
 //! The one interface every scan matcher implements, and the pieces they share.
 
 use super::kdtree::KdTree;
-use super::quality::{MatchQuality, Surface, TrustRule, surfaces, unresolved};
+use super::quality::{GuessAlongFree, MatchQuality, Surface, TrustRule, surfaces, unresolved};
 use super::scan::{RangeScan, SPARSE_BEAM_STEP_RAD, ScanPoints, beam_step_below};
 use crate::geometry::Pose2;
 use std::fmt;
@@ -139,7 +139,34 @@ pub trait ScanMatcher: Send + Sync + fmt::Debug {
             result.quality = rule.assess(reference, &current.xy, &result.pose);
         }
         result.converged = rule.confirms(reference, &current.xy, &result.pose, &mut result.quality);
+        // Trusted but for the hold: the scans place the answer across its free direction and
+        // in heading, the guess along it.
+        if let Some(along) = self.guess_along_free()
+            && rule.trusts_across(&result.quality)
+        {
+            let pose = along.place(
+                reference,
+                &current.xy,
+                &result.pose,
+                &result.quality,
+                &guess,
+            );
+            if pose != result.pose {
+                result.pose = pose;
+                result.quality = MatchQuality {
+                    held: false,
+                    ..rule.assess(reference, &current.xy, &pose)
+                };
+            }
+        }
         result
+    }
+
+    /// Whether an answer the scans do not hold along its free direction (trusted but for
+    /// [`MatchQuality::held`]) is moved along it toward the guess ([`GuessAlongFree`]), by
+    /// [`align`](Self::align); it stays untrusted. None by default.
+    fn guess_along_free(&self) -> Option<GuessAlongFree> {
+        None
     }
 
     /// [`align`](Self::align) for inputs known to be non-empty, finite and within

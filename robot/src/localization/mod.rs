@@ -38,11 +38,11 @@ pub use lorentz::{
     BOTH_WAYS, CLEAN_PASS_ENOUGH, COARSE, COARSE_FIRST_BELOW, CROWD_RATIO, DENSE_SIGMAS,
     EARLY_CONVERGENCE, FAR_SLIDE_M, FAR_SLIDE_SPREAD, FIRST_MATCH_CONVERGENCE,
     FIRST_PASS_CONVERGENCE, FIRST_PASS_ENOUGH, FIRST_PASS_SURFACE_POINTS, FIRST_PASS_THINNING,
-    FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD, LONELY_PASS_ENOUGH,
-    LonelyEnough, Lorentz, MERGE_REACH, POLISH_MORE, QuickFinish, RESTART_SHORTFALL,
-    RESTARTS_AGREE, RestartsAgree, SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH,
-    SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_QUICK, SPARSE_SIGMAS, SPARSE_START, SlideCheck,
-    StartRounds, THESIS_SIGMAS, Thinning, WIDE_SIGMAS,
+    FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS, GUESS_ALONG_FREE, LINE_RESIDUALS_SPREAD,
+    LONELY_PASS_ENOUGH, LonelyEnough, Lorentz, MERGE_REACH, POLISH_MORE, QuickFinish,
+    RESTART_SHORTFALL, RESTARTS_AGREE, RestartsAgree, SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE,
+    SPARSE_FINISH, SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_QUICK, SPARSE_SIGMAS, SPARSE_START,
+    SlideCheck, StartRounds, THESIS_SIGMAS, Thinning, WIDE_SIGMAS,
 };
 pub use map::{MapBuilder, MapConfig, MatchStats, Placed};
 pub use matcher::{
@@ -51,7 +51,7 @@ pub use matcher::{
 };
 pub use mbicp::Mbicp;
 pub use plicp::{GiveUp, PointToLine};
-pub use quality::{MatchQuality, TrustRule, polish};
+pub use quality::{GuessAlongFree, MatchQuality, TrustRule, polish};
 pub use scan::{
     RangeScan, SPARSE_BEAM_STEP_RAD, ScanPoints, beam_step, beam_step_below, fan_within_a_turn,
 };

@@ -25,6 +25,10 @@
 //!
 //! [`TrustRule`] turns these into the one flag a user of a match reads,
 //! [`MatchResult::converged`](super::MatchResult::converged).
+//!
+//! Where an answer fails the hold alone, the scans still place it across the corridor and in
+//! heading, and nothing in them places it along: a matcher with [`GuessAlongFree`] then takes
+//! the guess's place along the free direction, as far as the scans allow.
 
 use super::kdtree::LastNearest;
 use super::lines::direction;
@@ -98,6 +102,74 @@ impl MatchQuality {
         across_sigma: [f64::INFINITY; 2],
         across_step: [f64::INFINITY; 2],
     };
+}
+
+/// Where an answer the scans do not hold along its free direction ([`MatchQuality::held`]
+/// false, every other test of the [`TrustRule`] passed) is moved: along
+/// [`free`](MatchQuality::free), toward the guess's place along it, in steps of `step_m`, for
+/// as long as the moved answer fits at most `spare` fewer current points within `band_m` of
+/// the reference's surfaces than the answer does; its heading and its place across the
+/// direction stay the scans'. Such an answer stays untrusted.
+///
+/// Along a corridor the scans leave the advance open, so a match ends wherever its searches
+/// happened to stop there: the guess (the odometry, on a robot) is the only thing that says
+/// where along it the robot is, and of the places the scans fit alike the one nearest the
+/// guess is the likeliest. The walk stops at the first step that loses points (a doorway's
+/// edge, the corridor's end), so an answer the scans do hold, a little, keeps its place.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct GuessAlongFree {
+    /// The distance from a surface within which a current point counts as fitting, metres.
+    pub band_m: f64,
+    /// The step of the walk toward the guess, metres; longer when the guess lies farther than
+    /// `max_steps` of them, so that the walk takes `max_steps` at most.
+    pub step_m: f64,
+    /// The most steps the walk takes.
+    pub max_steps: usize,
+    /// How many fewer current points a place along the way may fit.
+    pub spare: usize,
+}
+
+impl GuessAlongFree {
+    /// `pose` (an answer of quality `q`) moved along `q.free` toward `guess`'s place along it,
+    /// as far as the current points fit there as at `pose`, within `spare`.
+    pub fn place(
+        &self,
+        reference: &Reference,
+        current: &[[f64; 2]],
+        pose: &Pose2,
+        q: &MatchQuality,
+        guess: &Pose2,
+    ) -> Pose2 {
+        let free = q.free;
+        let target = free[0] * (guess.x - pose.x) + free[1] * (guess.y - pose.y);
+        if !target.is_finite() || target == 0.0 {
+            return *pose;
+        }
+        let fits = |offset: f64| {
+            let moved = Pose2::new(
+                pose.x + offset * free[0],
+                pose.y + offset * free[1],
+                pose.theta,
+            );
+            constraints(reference, current, &moved, None)
+                .filter(|c| c.judged && c.residual.abs() <= self.band_m)
+                .count()
+        };
+        let here = fits(0.0);
+        let step = self.step_m.max(target.abs() / self.max_steps.max(1) as f64);
+        let mut kept = 0.0;
+        for k in 1..=self.max_steps.max(1) {
+            let offset = (k as f64 * step).min(target.abs()).copysign(target);
+            if fits(offset) + self.spare < here {
+                break;
+            }
+            kept = offset;
+            if offset.abs() >= target.abs() {
+                break;
+            }
+        }
+        Pose2::new(pose.x + kept * free[0], pose.y + kept * free[1], pose.theta)
+    }
 }
 
 /// When a match is trusted.
@@ -1310,6 +1382,40 @@ mod tests {
         assert!(!rule.trusts(&q));
     }
 
+    /// `n` points of a wall from `from` in steps of `step`, each moved off the wall along its
+    /// normal by a laser's centimetre of noise (a fixed sequence from its index `first + i`).
+    fn noisy_wall(from: [f64; 2], step: [f64; 2], n: usize, first: usize) -> Vec<[f64; 2]> {
+        let noise = |k: usize| 0.02 * ((k as f64 * 0.754_877_666).fract() - 0.5);
+        let len = step[0].hypot(step[1]);
+        // The step turned a quarter.
+        let normal = [-step[1] / len, step[0] / len];
+        (0..n)
+            .map(|i| {
+                let (e, t) = (noise(first + i), i as f64);
+                [
+                    from[0] + t * step[0] + e * normal[0],
+                    from[1] + t * step[1] + e * normal[1],
+                ]
+            })
+            .collect()
+    }
+
+    /// A corridor 6 m long and 2 m wide along x, its two walls' points 1.5 cm apart with noise
+    /// from index `first` ([`noisy_wall`]).
+    fn corridor_walls(first: usize) -> Vec<[f64; 2]> {
+        let mut walls = noisy_wall([-3.0, 1.0], [0.015, 0.0], 400, first);
+        walls.extend(noisy_wall([3.0, -1.0], [-0.015, 0.0], 400, first + 400));
+        walls
+    }
+
+    /// A doorway in [`corridor_walls`]' upper wall: its two jambs, 20 cm deep at x = 0 and 0.9,
+    /// which face along the corridor.
+    fn doorway_jambs(first: usize) -> Vec<[f64; 2]> {
+        let mut jambs = noisy_wall([0.0, 1.0], [0.0, 0.015], 14, first);
+        jambs.extend(noisy_wall([0.9, 1.2], [0.0, -0.015], 14, first + 14));
+        jambs
+    }
+
     /// A corridor whose walls carry a laser's centimetre of noise, points 1.5 cm apart: the
     /// chords' noisy normals sum to a σ along it under the rule's centimetre, so the
     /// information alone would trust an answer anywhere along it. Its surfaces all face one
@@ -1319,28 +1425,10 @@ mod tests {
     #[test]
     fn a_corridor_the_information_would_hold_is_not_held() {
         let rule = TrustRule::default();
-        let noise = |k: usize| 0.02 * ((k as f64 * 0.754_877_666).fract() - 0.5);
-        let wall = |from: [f64; 2], step: [f64; 2], n: usize, first: usize| {
-            (0..n)
-                .map(|i| {
-                    let e = noise(first + i);
-                    // Off the wall along its normal (the step turned a quarter).
-                    let len = step[0].hypot(step[1]);
-                    let normal = [-step[1] / len, step[0] / len];
-                    let t = i as f64;
-                    [
-                        from[0] + t * step[0] + e * normal[0],
-                        from[1] + t * step[1] + e * normal[1],
-                    ]
-                })
-                .collect::<Vec<_>>()
-        };
-        let mut corridor = wall([-3.0, 1.0], [0.015, 0.0], 400, 0);
-        corridor.extend(wall([3.0, -1.0], [-0.015, 0.0], 400, 400));
-        let r = reference(&corridor);
+        let corridor = corridor_walls(0);
         // The current scan: the same walls, its own noise.
-        let mut current = wall([-3.0, 1.0], [0.015, 0.0], 400, 1000);
-        current.extend(wall([3.0, -1.0], [-0.015, 0.0], 400, 1400));
+        let current = corridor_walls(1000);
+        let r = reference(&corridor);
         let q = rule.assess(&r, &current, &Pose2::IDENTITY);
         assert!(q.spread < rule.hold_below_spread, "{q:?}");
         assert!(
@@ -1352,26 +1440,86 @@ mod tests {
         assert!(!rule.holds(&r, &current, &Pose2::IDENTITY, &q));
 
         // A doorway in the upper wall: its jambs, 20 cm deep, face along the corridor.
-        let jambs = |first: usize| {
-            let mut j = wall([0.0, 1.0], [0.0, 0.015], 14, first);
-            j.extend(wall([0.9, 1.2], [0.0, -0.015], 14, first + 14));
-            j
-        };
         let (mut with, mut current_with) = (corridor.clone(), current.clone());
-        with.extend(jambs(2000));
-        current_with.extend(jambs(3000));
+        with.extend(doorway_jambs(2000));
+        current_with.extend(doorway_jambs(3000));
         let r = reference(&with);
         let q = rule.assess(&r, &current_with, &Pose2::IDENTITY);
         assert!(q.spread < rule.hold_below_spread, "{q:?}");
         assert!(rule.holds(&r, &current_with, &Pose2::IDENTITY, &q), "{q:?}");
 
         // A room's corner: its surfaces spread, and nothing more is asked.
-        let mut corner = wall([0.0, 2.0], [0.015, 0.0], 200, 0);
-        corner.extend(wall([3.0, 2.0], [0.0, -0.015], 200, 200));
+        let mut corner = noisy_wall([0.0, 2.0], [0.015, 0.0], 200, 0);
+        corner.extend(noisy_wall([3.0, 2.0], [0.0, -0.015], 200, 200));
         let r = reference(&corner);
         let q = rule.assess(&r, &corner, &Pose2::IDENTITY);
         assert!(q.spread >= rule.hold_below_spread, "{q:?}");
         assert!(rule.holds(&r, &corner, &Pose2::new(5.0, 5.0, 0.0), &q));
+    }
+
+    /// An answer slid along a corridor that does not hold it is walked back toward the guess
+    /// along the corridor, its heading and its place across kept; in the same corridor with a
+    /// doorway's jambs (surfaces across it), the walk stops at the first step that loses
+    /// points, so an answer the jambs hold keeps its place.
+    #[test]
+    fn an_unheld_answer_takes_the_guess_place_along_its_free_direction() {
+        let rule = TrustRule::default();
+        let along = GuessAlongFree {
+            band_m: 0.02,
+            step_m: 0.01,
+            max_steps: 30,
+            spare: 1,
+        };
+        let corridor = corridor_walls(0);
+        let current = corridor_walls(1000);
+
+        // Slid 7 cm along the corridor (and 3 mm across, 0.1° turned); the guess 1 cm off the
+        // truth along it, 4 cm across.
+        let slid = Pose2::new(0.07, 0.003, 0.1f64.to_radians());
+        let guess = Pose2::new(0.01, 0.04, 0.0);
+        let r = reference(&corridor);
+        let q = rule.assess(&r, &current, &slid);
+        assert!(
+            rule.trusts(&q) && !rule.holds(&r, &current, &slid, &q),
+            "{q:?}"
+        );
+        let placed = along.place(&r, &current, &slid, &q, &guess);
+        // Along the corridor (x, up to the sign of `free`) the guess's place; across and in
+        // heading the answer's.
+        assert!((placed.x - guess.x).abs() < 1e-3, "{placed:?}");
+        assert!((placed.y - slid.y).abs() < 2e-3, "{placed:?}");
+        assert_eq!(placed.theta, slid.theta);
+
+        // A doorway's jambs, 20 cm deep, across the upper wall at x = 0 and 0.9: seen in both
+        // scans, they hold the answer at the truth, and a walk toward a guess 8 cm along stops
+        // within the band's 2 cm.
+        let (mut with, mut current_with) = (corridor.clone(), current.clone());
+        with.extend(doorway_jambs(2000));
+        current_with.extend(doorway_jambs(3000));
+        let r = reference(&with);
+        let q = rule.assess(&r, &current_with, &Pose2::IDENTITY);
+        let placed = along.place(
+            &r,
+            &current_with,
+            &Pose2::IDENTITY,
+            &q,
+            &Pose2::new(0.08, 0.0, 0.0),
+        );
+        assert!(placed.x.abs() <= 0.02, "{placed:?}");
+
+        // A guess exactly at the answer's place along it, or a direction that is not finite,
+        // leave the answer where it is.
+        let q = rule.assess(&reference(&corridor), &current, &slid);
+        let at = along.place(&reference(&corridor), &current, &slid, &q, &slid);
+        assert_eq!(at, slid);
+        let lost = MatchQuality {
+            free: [f64::NAN, 0.0],
+            ..q
+        };
+        assert_eq!(
+            along.place(&reference(&corridor), &current, &slid, &lost, &guess),
+            slid
+        );
     }
 
     /// The position's weakest σ is the larger axis of its covariance, whatever the axes: a

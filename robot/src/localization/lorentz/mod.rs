@@ -19,9 +19,9 @@ pub use settings::{
     BOTH_WAYS, CLEAN_PASS_ENOUGH, COARSE, COARSE_FIRST_BELOW, CROWD_RATIO, DENSE_SIGMAS,
     EARLY_CONVERGENCE, FAR_SLIDE_M, FAR_SLIDE_SPREAD, FIRST_MATCH_CONVERGENCE,
     FIRST_PASS_CONVERGENCE, FIRST_PASS_ENOUGH, FIRST_PASS_SURFACE_POINTS, FIRST_PASS_THINNING,
-    FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS, LINE_RESIDUALS_SPREAD, LONELY_PASS_ENOUGH,
-    LonelyEnough, MERGE_REACH, POLISH_MORE, QuickFinish, RESTART_SHORTFALL, RESTARTS,
-    RESTARTS_AGREE, RestartsAgree, SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH,
+    FIRST_SPREAD, FIRST_SPREAD_MARGIN, FIRST_STEPS, GUESS_ALONG_FREE, LINE_RESIDUALS_SPREAD,
+    LONELY_PASS_ENOUGH, LonelyEnough, MERGE_REACH, POLISH_MORE, QuickFinish, RESTART_SHORTFALL,
+    RESTARTS, RESTARTS_AGREE, RestartsAgree, SLIDE_CHECK, SPARSE_EARLY_CONVERGENCE, SPARSE_FINISH,
     SPARSE_LINE_RESIDUALS_SPREAD, SPARSE_QUICK, SPARSE_SIGMAS, SPARSE_START, SlideCheck,
     StartRounds, THESIS_SIGMAS, Thinning, WIDE_SIGMAS,
 };
@@ -31,7 +31,7 @@ use super::kdtree::LastNearest;
 use super::lines::{LazyLines, LineParams};
 use super::matcher::{Convergence, MatchResult, Reference, ScanMatcher};
 use super::plicp::PointToLine;
-use super::quality::{TrustRule, polish_both_ways, slide_vote};
+use super::quality::{GuessAlongFree, TrustRule, polish_both_ways, slide_vote};
 use super::scan::{SPARSE_BEAM_STEP_RAD, ScanPoints, beam_step_below};
 use crate::geometry::{Pose2, wrap_angle};
 use passes::{Assist, BOTH_WAYS_WIDTH_M, POLISH_GATE_M, Visits};
@@ -398,6 +398,12 @@ pub struct Lorentz {
     /// Not in the thesis; `None` (the default) leaves the answer as it is, and
     /// [`Lorentz::with_lines`] has [`BOTH_WAYS`].
     pub both_ways: Option<usize>,
+    /// An answer the scans do not hold along its free direction (a corridor's advance), and
+    /// trust in every other way, is moved along it toward the guess as far as the scans fit
+    /// alike ([`GuessAlongFree`], by [`ScanMatcher::align`]); it stays untrusted. Not in the
+    /// thesis; `None` (the default) leaves it where the match ended, and
+    /// [`Lorentz::with_lines`] has [`GUESS_ALONG_FREE`].
+    pub guess_along_free: Option<GuessAlongFree>,
 }
 
 impl Lorentz {
@@ -457,6 +463,7 @@ impl Lorentz {
             slide_check: Some(SLIDE_CHECK),
             sparse_slide_check: Some(SLIDE_CHECK),
             both_ways: Some(BOTH_WAYS),
+            guess_along_free: Some(GUESS_ALONG_FREE),
             ..Lorentz::default()
         }
     }
@@ -521,6 +528,7 @@ impl Default for Lorentz {
             slide_check: None,
             sparse_slide_check: None,
             both_ways: None,
+            guess_along_free: None,
         }
     }
 }
@@ -532,6 +540,10 @@ impl ScanMatcher for Lorentz {
         } else {
             "lorentz"
         }
+    }
+
+    fn guess_along_free(&self) -> Option<GuessAlongFree> {
+        self.guess_along_free
     }
 
     fn align_plausible(
@@ -1368,5 +1380,63 @@ mod tests {
         let thesis = Lorentz::default();
         assert_eq!(thesis.sigmas_m.len(), THESIS_SIGMAS.len());
         assert_eq!(thesis.schedule(&lms), thesis.sigmas_m.as_slice());
+    }
+
+    /// A corridor 2 m wide and longer than the laser's reach, each scan with a centimetre of
+    /// range noise: the scans place the current laser across the corridor and in heading, and
+    /// nothing in them says where along it. `lorentz-lines`' answer is not trusted, and takes
+    /// the guess's place along the corridor, its place across and its heading the scans'
+    /// ([`GUESS_ALONG_FREE`]); without it the answer ends wherever the match stopped.
+    #[test]
+    fn along_a_corridor_the_answer_takes_the_guess_place() {
+        let scan = |at: Pose2, salt: usize| {
+            let inc = 0.5f64.to_radians();
+            let ranges = (0..361)
+                .map(|k| {
+                    let a = at.theta - std::f64::consts::FRAC_PI_2 + k as f64 * inc;
+                    let wall = if a.sin() > 0.0 { 1.0 } else { -1.0 };
+                    let r = (wall - at.y) / a.sin();
+                    let noise = 0.02 * (((k + salt) as f64 * 0.754_877_666).fract() - 0.5);
+                    if r.is_finite() && r > 0.0 && r < 30.0 {
+                        r + noise
+                    } else {
+                        f64::NAN
+                    }
+                })
+                .collect();
+            RangeScan::new(-std::f64::consts::FRAC_PI_2, inc, 30.0, ranges)
+        };
+        let reference = Reference::new(scan(Pose2::IDENTITY, 0).points());
+        let truth = Pose2::new(0.30, 0.12, 3f64.to_radians());
+        let current = scan(truth, 1000).points();
+        let guess = Pose2::new(0.36, 0.16, 4f64.to_radians());
+        let matcher = Lorentz::with_lines();
+        let found = matcher.align(&reference, &current, guess);
+        assert!(!found.converged, "{found:?}");
+        // The corridor runs along x: along it the guess's place, across it and in heading the
+        // truth's.
+        assert!((found.pose.x - guess.x).abs() < 1e-3, "{found:?}");
+        assert!((found.pose.y - truth.y).abs() < 0.01, "{found:?}");
+        assert!(
+            (found.pose.theta - truth.theta).abs() < 0.3f64.to_radians(),
+            "{found:?}"
+        );
+
+        // Without the rule the match stops where its searches left it; the rule walks that
+        // answer along its free direction, and judges it again there.
+        let without = Lorentz {
+            guess_along_free: None,
+            ..Lorentz::with_lines()
+        };
+        let left = without.align(&reference, &current, guess);
+        assert!(
+            TrustRule::default().trusts_across(&left.quality),
+            "{left:?}"
+        );
+        let walked =
+            GUESS_ALONG_FREE.place(&reference, &current.xy, &left.pose, &left.quality, &guess);
+        assert_ne!(left.pose, found.pose);
+        assert_eq!(found.pose, walked);
+        assert!(!found.quality.held);
     }
 }
