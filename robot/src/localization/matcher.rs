@@ -139,8 +139,8 @@ pub trait ScanMatcher: Send + Sync + fmt::Debug {
             result.quality = rule.assess(reference, &current.xy, &result.pose);
         }
         result.converged = rule.confirms(reference, &current.xy, &result.pose, &mut result.quality);
-        // Trusted but for the hold: the scans place the answer across its free direction and
-        // in heading, the guess along it.
+        // Refused only along its free direction: the scans place the answer across it and in
+        // heading, the guess (as far as the scans allow) along it.
         if let Some(along) = self.guess_along_free()
             && rule.trusts_across(&result.quality)
         {
@@ -162,9 +162,9 @@ pub trait ScanMatcher: Send + Sync + fmt::Debug {
         result
     }
 
-    /// Whether an answer the scans do not hold along its free direction (trusted but for
-    /// [`MatchQuality::held`]) is moved along it toward the guess ([`GuessAlongFree`]), by
-    /// [`align`](Self::align); it stays untrusted. None by default.
+    /// Whether an answer the trust rule refuses only along its free direction
+    /// ([`TrustRule::trusts_across`]) is moved along it toward the guess ([`GuessAlongFree`]),
+    /// by [`align`](Self::align), and judged again there; it stays untrusted. None by default.
     fn guess_along_free(&self) -> Option<GuessAlongFree> {
         None
     }

@@ -26,7 +26,8 @@
 //! [`TrustRule`] turns these into the one flag a user of a match reads,
 //! [`MatchResult::converged`](super::MatchResult::converged).
 //!
-//! Where an answer fails the hold alone, the scans still place it across the corridor and in
+//! Where an answer is refused only along its free direction
+//! ([`TrustRule::trusts_across`]), the scans still place it across the corridor and in
 //! heading, and nothing in them places it along: a matcher with [`GuessAlongFree`] then takes
 //! the guess's place along the free direction, as far as the scans allow.
 
@@ -104,9 +105,10 @@ impl MatchQuality {
     };
 }
 
-/// Where an answer the scans do not hold along its free direction ([`MatchQuality::held`]
-/// false, every other test of the [`TrustRule`] passed) is moved: along
-/// [`free`](MatchQuality::free), toward the guess's place along it, in steps of `step_m`, for
+/// Where an answer the trust rule refuses only along its free direction is moved
+/// ([`TrustRule::trusts_across`]: the scans do not hold it there, or its σ along it is too
+/// large, every other test passed): along [`free`](MatchQuality::free), toward the guess's
+/// place along it, in steps of `step_m`, for
 /// as long as the moved answer fits at most `spare` fewer current points within `band_m` of
 /// the reference's surfaces than the answer does; its heading and its place across the
 /// direction stay the scans'. Such an answer stays untrusted.

@@ -398,8 +398,8 @@ pub struct Lorentz {
     /// Not in the thesis; `None` (the default) leaves the answer as it is, and
     /// [`Lorentz::with_lines`] has [`BOTH_WAYS`].
     pub both_ways: Option<usize>,
-    /// An answer the scans do not hold along its free direction (a corridor's advance), and
-    /// trust in every other way, is moved along it toward the guess as far as the scans fit
+    /// An answer the trust rule refuses only along its free direction (a corridor's advance,
+    /// [`TrustRule::trusts_across`]) is moved along it toward the guess as far as the scans fit
     /// alike ([`GuessAlongFree`], by [`ScanMatcher::align`]); it stays untrusted. Not in the
     /// thesis; `None` (the default) leaves it where the match ended, and
     /// [`Lorentz::with_lines`] has [`GUESS_ALONG_FREE`].
