@@ -147,16 +147,7 @@ impl GuessAlongFree {
         if !target.is_finite() || target == 0.0 {
             return *pose;
         }
-        let fits = |offset: f64| {
-            let moved = Pose2::new(
-                pose.x + offset * free[0],
-                pose.y + offset * free[1],
-                pose.theta,
-            );
-            constraints(reference, current, &moved, None)
-                .filter(|c| c.judged && c.residual.abs() <= self.band_m)
-                .count()
-        };
+        let fits = |offset: f64| fits_moved(reference, current, pose, (free, offset), self.band_m);
         let here = fits(0.0);
         let step = self.step_m.max(target.abs() / self.max_steps.max(1) as f64);
         let mut kept = 0.0;
@@ -172,6 +163,26 @@ impl GuessAlongFree {
         }
         Pose2::new(pose.x + kept * free[0], pose.y + kept * free[1], pose.theta)
     }
+}
+
+/// How many current points, the answer `pose` moved by `offset` metres along the unit direction
+/// `along` (its heading kept), lie within `band` metres of the reference's surfaces (of those
+/// the rule can judge): the count [`TrustRule::holds`] and [`GuessAlongFree`] weigh a shift by.
+fn fits_moved(
+    reference: &Reference,
+    current: &[[f64; 2]],
+    pose: &Pose2,
+    (along, offset): ([f64; 2], f64),
+    band: f64,
+) -> usize {
+    let moved = Pose2::new(
+        pose.x + offset * along[0],
+        pose.y + offset * along[1],
+        pose.theta,
+    );
+    constraints(reference, current, &moved, None)
+        .filter(|c| c.judged && c.residual.abs() <= band)
+        .count()
 }
 
 /// When a match is trusted.
@@ -291,15 +302,9 @@ impl TrustRule {
         }
         [1.0, -1.0].iter().all(|sign| {
             let shift = sign * self.hold_shift_m;
-            let moved = Pose2::new(
-                pose.x + shift * q.free[0],
-                pose.y + shift * q.free[1],
-                pose.theta,
-            );
-            let fits = constraints(reference, current, &moved, None)
-                .filter(|c| c.judged && c.residual.abs() <= self.inlier_m)
-                .count();
-            fits + self.min_hold_loss <= q.inliers
+            fits_moved(reference, current, pose, (q.free, shift), self.inlier_m)
+                + self.min_hold_loss
+                <= q.inliers
         })
     }
 
