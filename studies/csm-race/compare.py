@@ -74,9 +74,17 @@ def main(argv):
         for line, r in enumerate(read_csv(c_csv), start=2):
             try:
                 c_rows.setdefault(r["row"], {})[int(r["pair"])] = r
-                float(r["micros"])
-            except (KeyError, ValueError) as e:
-                fail(f"{c_csv}, line {line}: expected row,pair,micros,...: {e}")
+                # An answer may be NaN (a C matcher that failed so): its error counts as infinite.
+                for field in ("micros", "x", "y", "theta", "error_m"):
+                    float(r[field])
+                if not math.isfinite(float(r["micros"])):
+                    raise ValueError(f"micros is {r['micros']}")
+                int(r["success"])
+            except (KeyError, ValueError, TypeError) as e:
+                fail(f"{c_csv}, line {line}: expected row,pair,micros,valid,x,y,theta,iterations,"
+                     f"error_m,error_rad,success: {e}")
+        if not c_rows:
+            fail(f"{c_csv}: no pairs (expected the output of race_csm or race_mbicp)")
         for row, pairs in c_rows.items():
             if row not in stats:
                 order.append(row)
@@ -91,7 +99,8 @@ def main(argv):
                 s["n"] += 1
                 s["c"] += int(k["success"])
                 s["ll"] += int(ll["success"])
-                s["c_err"].append(float(k["error_m"]) * 1e3)
+                c_err = float(k["error_m"]) * 1e3
+                s["c_err"].append(c_err if math.isfinite(c_err) else math.inf)
                 s["ll_err"].append(float(ll["error_mm"]))
                 s["like"] += int(o["success"])
                 dxy = math.hypot(float(o["x_m"]) - float(k["x"]), float(o["y_m"]) - float(k["y"]))
